@@ -1,0 +1,3 @@
+from tactile_cli.cli import main
+
+main()

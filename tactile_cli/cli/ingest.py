@@ -1,0 +1,52 @@
+"""`tactile ingest INPUT... --out FILE`"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
+from ..store.writer import Compression
+from ._errors import run_guarded
+from .progress import RichProgress
+
+
+def ingest_command(
+    inputs: Annotated[list[Path], typer.Argument(help="Raw recordings: files or folders.", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", show_default=False)],
+    fmt: Annotated[str, typer.Option("--format", "-f",
+                                     help=f"Input format: auto, {', '.join(FORMATS)}.")] = "auto",
+    mapping: Annotated[Path | None, typer.Option(
+        help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml).")] = None,
+    label: Annotated[list[str] | None, typer.Option(
+        "--label", "-l", help="key=value label added to every trial; repeatable.")] = None,
+    width: Annotated[int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")] = None,
+    height: Annotated[int | None, typer.Option(help="Event sensor height in px (CSV/NPY events).")] = None,
+    sensor: Annotated[str | None, typer.Option(help="Sensor name to record (default from the input).")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    compression: Annotated[int, typer.Option(
+        min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed.")] = 4,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a terminal).",
+        show_default=False)] = None,
+) -> None:
+    """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
+
+    Formats: AEDAT4 event files, event CSV (t,x,y,p) and NPY structured arrays, the
+    accelerometer CSV tree (object/orientation/speed folders), any sensor CSV described by
+    a YAML mapping file, and image-sequence folders of visuotactile sensors. The output is
+    written to a temporary file and renamed into place only when complete and valid.
+    """
+
+    def body() -> None:
+        options = IngestOptions(format=fmt, mapping=mapping, labels=parse_labels(label or []),
+                                width_px=width, height_px=height, sensor_name=sensor)
+        with RichProgress(enabled=progress) as bar:
+            path = ingest(inputs, out, options=options, overwrite=overwrite,
+                          compression=Compression(None if compression < 0 else compression),
+                          progress=bar)
+        typer.echo(f"wrote {path}")
+
+    run_guarded(body)

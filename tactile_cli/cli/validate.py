@@ -1,0 +1,32 @@
+"""`tactile validate FILE...`"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..store.validate import validate_file
+
+
+def validate_command(
+    files: Annotated[list[Path], typer.Argument(help="HDF5 files to check.", show_default=False)],
+    as_json: Annotated[bool, typer.Option("--json", help="Print the reports as JSON.")] = False,
+) -> None:
+    """Check files against the tactile schema. Exit 0 when all are valid, 1 when any is not."""
+    reports = [validate_file(f) for f in files]
+    if as_json:
+        typer.echo(json.dumps([r.as_dict() for r in reports], indent=2))
+    else:
+        for r in reports:
+            if r.ok:
+                typer.echo(f"{r.file}: valid (schema {r.schema_version})")
+            else:
+                typer.echo(f"{r.file}: {len(r.violations)} violation(s)")
+                for v in r.violations:
+                    typer.echo(f"  {v}")
+            for note in r.notes:
+                typer.echo(f"  note: {note}")
+    raise typer.Exit(0 if all(r.ok for r in reports) else 1)

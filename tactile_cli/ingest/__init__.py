@@ -1,0 +1,143 @@
+"""`tactile ingest`: raw recordings of any supported format into one tactile HDF5 file.
+
+Each format has its own module with one entry function
+``ingest_<format>(inputs, writer, options, progress)`` that adds sensors and trials to a
+:class:`~tactile_cli.store.StoreWriter`. :func:`ingest` picks the format, opens the writer
+(temporary file, validation, atomic rename) and adds run-wide labels.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from ..progress import NullProgress, Progress
+from ..store.writer import Compression, StoreWriter
+
+#: format name -> "module:function" (imported on use, so the CLI starts fast)
+FORMATS: dict[str, str] = {
+    "aedat4": "tactile_cli.ingest.events_aedat4:ingest_aedat4",
+    "events-csv": "tactile_cli.ingest.events_table:ingest_events_csv",
+    "events-npy": "tactile_cli.ingest.events_table:ingest_events_npy",
+    "accel-tree": "tactile_cli.ingest.accel_tree:ingest_accel_tree",
+    "mapped-csv": "tactile_cli.ingest.mapped_csv:ingest_mapped_csv",
+    "images": "tactile_cli.ingest.image_sequence:ingest_image_sequence",
+}
+
+IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg"}
+
+
+@dataclass
+class IngestOptions:
+    """Options shared by all formats (each format reads the ones it needs)."""
+
+    format: str = "auto"
+    mapping: Path | None = None  # YAML mapping file for mapped-csv
+    labels: dict[str, str | int | float] = field(default_factory=dict)  # added to every trial
+    width_px: int | None = None  # event sensor geometry for CSV/NPY events
+    height_px: int | None = None
+    sensor_name: str | None = None
+    chunk_events: int = 1 << 20  # events read per chunk while streaming
+
+    def as_config(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["mapping"] = None if self.mapping is None else str(self.mapping)
+        return out
+
+
+def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
+    """The format of the inputs: explicit ``options.format`` or inferred from them."""
+    if options.format != "auto":
+        if options.format not in FORMATS:
+            raise InputError(f"unknown format {options.format!r}; use one of: {', '.join(FORMATS)}")
+        return options.format
+    if options.mapping is not None:
+        return "mapped-csv"
+    kinds = set()
+    for path in inputs:
+        if path.is_dir():
+            if any(p.suffix.lower() in IMAGE_SUFFIXES for p in path.iterdir()):
+                kinds.add("images")
+            else:
+                raise InputError("cannot tell the format of a folder; pass --format accel-tree, "
+                                 "--format images, or --mapping FILE.yaml", path=path)
+        elif path.suffix.lower() == ".aedat4":
+            kinds.add("aedat4")
+        elif path.suffix.lower() == ".npy":
+            kinds.add("events-npy")
+        elif path.suffix.lower() == ".csv":
+            kinds.add("events-csv")
+        else:
+            raise InputError(f"unknown format (suffix {path.suffix or 'none'!r}); supported: .aedat4, "
+                             ".npy, .csv events, folders with --format or --mapping", path=path)
+    if len(kinds) != 1:
+        raise InputError(f"inputs mix formats ({', '.join(sorted(kinds))}); ingest each format separately")
+    return kinds.pop()
+
+
+def ingest(
+    inputs: Sequence[str | Path],
+    out: str | Path,
+    *,
+    options: IngestOptions | None = None,
+    overwrite: bool = False,
+    compression: Compression = Compression(),
+    progress: Progress | None = None,
+    command: str | None = None,
+) -> Path:
+    """Ingest raw recordings into one validated tactile HDF5 file; returns its path.
+
+    Nothing is written unless the whole ingest succeeds: on any error the temporary
+    file is removed and an existing ``out`` is left as it was.
+    """
+    options = options or IngestOptions()
+    progress = progress or NullProgress()
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise InputError("no input files given")
+    for path in paths:
+        if not path.exists():
+            raise InputError("file not found", path=path)
+    fmt = detect_format(paths, options)
+    module_name, func_name = FORMATS[fmt].split(":")
+    reader = getattr(importlib.import_module(module_name), func_name)
+    config = {"format": fmt, **options.as_config(), "compression_level": compression.level,
+              "inputs": [str(p) for p in paths]}
+    with StoreWriter(out, command=command, config=config, overwrite=overwrite,
+                     compression=compression) as writer:
+        reader(paths, writer, options, progress)
+        trials = writer.h5["trials"]
+        if len(trials) == 0:
+            raise InputError("no trials found in the inputs", path=paths[0])
+        if options.labels:
+            for group in trials.values():
+                for key, value in options.labels.items():
+                    group["labels"].attrs[key] = value
+        return writer.commit()
+
+
+def parse_labels(pairs: Sequence[str]) -> dict[str, str | int | float]:
+    """``["object=box", "speed=0.02"]`` -> ``{"object": "box", "speed": 0.02}``."""
+    out: dict[str, str | int | float] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip():
+            raise InputError(f"--label {pair!r} must look like key=value")
+        out[key.strip()] = _number_or_text(value.strip())
+    return out
+
+
+def _number_or_text(value: str) -> str | int | float:
+    for cast in (int, float):
+        try:
+            return cast(value)
+        except ValueError:
+            pass
+    return value
+
+
+__all__ = ["IngestOptions", "ingest", "detect_format", "parse_labels", "FORMATS"]

@@ -1,0 +1,16 @@
+"""The tactile HDF5 store: schema spec, atomic writer, validator and readers."""
+
+from .reader import FileSummary as FileSummary
+from .reader import read_events as read_events
+from .reader import read_events_window as read_events_window
+from .reader import read_signal as read_signal
+from .reader import summarize as summarize
+from .reader import trial_names as trial_names
+from .spec import load_spec as load_spec
+from .validate import ValidationReport as ValidationReport
+from .validate import Violation as Violation
+from .validate import validate_file as validate_file
+from .writer import Compression as Compression
+from .writer import StoreWriter as StoreWriter
+from .writer import TrialWriter as TrialWriter
+from .writer import safe_name as safe_name

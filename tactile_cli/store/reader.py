@@ -1,0 +1,154 @@
+"""Read tactile HDF5 files: version gate, trial listing and the summary behind `tactile info`."""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from .validate import check_readable
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value.tolist()]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@dataclass
+class SensorInfo:
+    name: str
+    kind: str
+    sample_rate_hz: float
+    n_channels: int
+    geometry: str
+    units: list[str]
+
+
+@dataclass
+class TrialInfo:
+    name: str
+    duration_s: float
+    split: str
+    labels: dict[str, Any]
+    n_events: int
+    streams: dict[str, list[int]]  # stream -> [n_samples, n_channels]
+    n_frames: int
+
+
+@dataclass
+class FileSummary:
+    """What `tactile info` shows about one file."""
+
+    file: str
+    schema_version: str
+    tool_version: str
+    created_utc: str
+    command: str
+    n_sources: int
+    sensors: list[SensorInfo] = field(default_factory=list)
+    trials: list[TrialInfo] = field(default_factory=list)
+
+    @property
+    def label_counts(self) -> dict[str, dict[str, int]]:
+        counts: dict[str, Counter[str]] = {}
+        for trial in self.trials:
+            for key, value in trial.labels.items():
+                counts.setdefault(key, Counter())[str(value)] += 1
+        return {k: dict(sorted(v.items())) for k, v in sorted(counts.items())}
+
+    @property
+    def total_duration_s(self) -> float:
+        return float(sum(t.duration_s for t in self.trials))
+
+    def as_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["label_counts"] = self.label_counts
+        out["total_duration_s"] = self.total_duration_s
+        return out
+
+
+def summarize(path: str | Path) -> FileSummary:
+    """Summarise a tactile file (sensors, trials, labels, durations)."""
+    version = check_readable(path)
+    with h5py.File(path, "r") as h5:
+        a = h5.attrs
+        summary = FileSummary(
+            file=str(path),
+            schema_version=version,
+            tool_version=_plain(a.get("tool_version", "")),
+            created_utc=_plain(a.get("created_utc", "")),
+            command=_plain(a.get("command", "")),
+            n_sources=int(h5["provenance/sources/path"].shape[0]) if "provenance/sources/path" in h5 else 0,
+        )
+        for name, g in h5["sensors"].items():
+            n_ch = int(g["channel_names"].shape[0]) if "channel_names" in g else 0
+            geometry = ""
+            if "width_px" in g.attrs:
+                geometry = f"{int(g.attrs['width_px'])}x{int(g.attrs['height_px'])} px"
+            elif "taxel_positions_m" in g:
+                geometry = f"{g['taxel_positions_m'].shape[0]} taxels"
+            units = sorted(set(g["channel_units"].asstr()[()])) if "channel_units" in g else []
+            summary.sensors.append(SensorInfo(name, _plain(g.attrs["kind"]),
+                                              float(g.attrs["sample_rate_hz"]), n_ch, geometry, units))
+        for name, g in h5["trials"].items():
+            streams = {}
+            if "signals" in g:
+                for s_name, s in g["signals"].items():
+                    streams[s_name] = list(s["data"].shape)
+            summary.trials.append(TrialInfo(
+                name=name,
+                duration_s=float(g.attrs.get("duration_s", 0.0)),
+                split=_plain(g.attrs.get("split", "")),
+                labels={k: _plain(v) for k, v in g["labels"].attrs.items()},
+                n_events=int(g["events/t"].shape[0]) if "events" in g else 0,
+                streams=streams,
+                n_frames=int(g["frames/images"].shape[0]) if "frames" in g else 0,
+            ))
+    return summary
+
+
+def trial_names(path: str | Path) -> list[str]:
+    check_readable(path)
+    with h5py.File(path, "r") as h5:
+        return list(h5["trials"].keys())
+
+
+def read_events(path: str | Path, trial: str) -> dict[str, np.ndarray]:
+    """All events of one trial as arrays ``x, y, t, p`` (see the schema for dtypes)."""
+    check_readable(path)
+    with h5py.File(path, "r") as h5:
+        g = h5[f"trials/{trial}/events"]
+        return {k: g[k][()] for k in ("x", "y", "t", "p")}
+
+
+def read_events_window(path: str | Path, trial: str, t0_ms: int, t1_ms: int) -> dict[str, np.ndarray]:
+    """Events with ``origin + t0_ms <= t < origin + t1_ms`` through the millisecond index."""
+    with h5py.File(path, "r") as h5:
+        g = h5[f"trials/{trial}/events"]
+        idx = g["ms_to_idx"]
+        n = g["t"].shape[0]
+        lo = int(idx[t0_ms]) if t0_ms < idx.shape[0] else n
+        hi = int(idx[t1_ms]) if t1_ms < idx.shape[0] else n
+        return {k: g[k][lo:hi] for k in ("x", "y", "t", "p")}
+
+
+def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
+    """One sampled stream: ``data`` (n, c) float32, ``t_s`` (n,), ``sample_labels`` dict."""
+    check_readable(path)
+    with h5py.File(path, "r") as h5:
+        g = h5[f"trials/{trial}/signals/{stream}"]
+        labels = {}
+        if "sample_labels" in g:
+            for k, ds in g["sample_labels"].items():
+                labels[k] = ds[()]
+        return {"data": g["data"][()], "t_s": g["t_s"][()], "sensor": _plain(g.attrs["sensor"]),
+                "sample_labels": labels}
