@@ -12,6 +12,7 @@ import typer
 
 from .._version import __version__
 from . import info as _info
+from . import plot as _plot
 from . import ingest as _ingest
 from . import validate as _validate
 
@@ -42,6 +43,7 @@ def _root(
 app.command("ingest", help="Raw recordings (AEDAT4/CSV/NPY events, sensor CSVs, images) into one HDF5 file.")(
     _ingest.ingest_command)
 app.command("info", help="Sensors, trials, labels and durations of a tactile HDF5 file.")(_info.info_command)
+app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 files.")(_plot.plot_command)
 app.command("validate", help="Check HDF5 files against the tactile schema; list every violation.")(
     _validate.validate_command)
 

@@ -1,0 +1,33 @@
+"""`tactile plot FILE... --out DIR`"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import run_guarded
+
+
+def plot_command(
+    files: Annotated[list[Path], typer.Argument(help="Tactile HDF5 files.", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for the PNGs and index.html.",
+                                      show_default=False)],
+    max_trials: Annotated[int, typer.Option(min=1, help="Trials drawn per file.")] = 4,
+) -> None:
+    """Quick-look figures of each file (events per 20 ms, signals with labels, frames) and
+    one self-contained HTML page that shows them with the files' summaries."""
+
+    def body() -> None:
+        from ..plots.quicklook import write_html  # matplotlib loads only when plotting
+
+        for f in files:
+            if not f.exists():
+                raise InputError("file not found", path=f)
+        out.mkdir(parents=True, exist_ok=True)
+        page = write_html(list(files), out, max_trials=max_trials)
+        typer.echo(f"wrote {page}")
+
+    run_guarded(body)

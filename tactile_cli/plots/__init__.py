@@ -1,0 +1,1 @@
+"""Figures of tactile files (matplotlib, headless)."""

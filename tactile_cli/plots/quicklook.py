@@ -1,0 +1,207 @@
+"""Quick-look figures of a tactile HDF5 file, and an HTML page that shows them.
+
+One figure per trial and modality:
+
+- events: counts per 20 ms bin by polarity and their net (the accumulation the event-camera
+  paper uses, 000 section 4), beside the net-polarity event frame of the whole trial;
+- signals: every stream over time (up to 8 channels drawn), categorical per-sample labels
+  shaded behind;
+- frames: the no-contact reference, the frame that differs most from it, and their
+  absolute difference.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..store.reader import summarize  # noqa: E402
+from ..store.validate import check_readable  # noqa: E402
+
+BIN_US = 20_000
+MAX_CHANNELS_DRAWN = 8
+LABEL_COLOURS = ["#cfe8ff", "#ffe0c2", "#d8f5d0", "#f5d0e8", "#e8e8e8", "#fff5b8"]
+
+
+@dataclass
+class Figure:
+    """A written figure: its file and a caption."""
+
+    path: Path
+    caption: str
+
+
+def event_counts(t_us: np.ndarray, p: np.ndarray, *, bin_us: int = BIN_US) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Events per bin: (bin start in s from the first event (n_bins,), ON counts, OFF counts)."""
+    if t_us.size == 0:
+        return np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    b = (t_us - t_us[0]) // bin_us
+    n_bins = int(b[-1]) + 1
+    on = np.bincount(b[p > 0], minlength=n_bins)
+    off = np.bincount(b[p < 0], minlength=n_bins)
+    return np.arange(n_bins) * bin_us * 1e-6, on, off
+
+
+def _events_figure(g: h5py.Group, width: int, height: int, title: str, out: Path) -> None:
+    t, p = g["t"][()], g["p"][()]
+    x, y = g["x"][()], g["y"][()]
+    start, on, off = event_counts(t, p)
+    frame = np.zeros((height, width), dtype=np.int64)
+    np.add.at(frame, (y, x), p.astype(np.int64))
+    fig, (a0, a1) = plt.subplots(1, 2, figsize=(12, 3.6), gridspec_kw={"width_ratios": [2, 1]})
+    a0.plot(start, on, lw=0.8, label="ON (+1)")
+    a0.plot(start, off, lw=0.8, label="OFF (-1)")
+    a0.plot(start, on - off, lw=1.0, color="k", label="net")
+    a0.set_xlabel("time since first event (s)")
+    a0.set_ylabel(f"events per {BIN_US // 1000} ms")
+    a0.legend(loc="upper right", fontsize=8)
+    lim = max(1, int(np.percentile(np.abs(frame), 99.5)))
+    im = a1.imshow(frame, cmap="coolwarm", vmin=-lim, vmax=lim, interpolation="nearest")
+    a1.set_title("net polarity per pixel", fontsize=9)
+    fig.colorbar(im, ax=a1, fraction=0.046)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+
+
+def _shade_labels(ax, t: np.ndarray, labels: np.ndarray, classes: list[str]) -> None:
+    change = np.flatnonzero(np.diff(labels)) + 1
+    starts = np.r_[0, change]
+    ends = np.r_[change, len(labels)]
+    seen = set()
+    for s, e in zip(starts, ends, strict=True):
+        k = int(labels[s])
+        name = classes[k] if 0 <= k < len(classes) else str(k)
+        ax.axvspan(t[s], t[min(e, len(t) - 1)], color=LABEL_COLOURS[k % len(LABEL_COLOURS)], lw=0,
+                   label=None if name in seen else name, zorder=0)
+        seen.add(name)
+
+
+def _signals_figure(h5: h5py.File, g: h5py.Group, title: str, out: Path) -> None:
+    streams = list(g.items())
+    fig, axes = plt.subplots(len(streams), 1, figsize=(12, 2.6 * len(streams)), squeeze=False)
+    for ax, (name, s) in zip(axes[:, 0], streams, strict=True):
+        data, t = s["data"], s["t_s"][()]
+        sensor = h5["sensors"][s.attrs["sensor"]]
+        channels = sensor["channel_names"].asstr()[()] if "channel_names" in sensor else []
+        units = sensor["channel_units"].asstr()[()] if "channel_units" in sensor else []
+        step = max(1, len(t) // 20000)  # draw at most ~20k points per line
+        shown = data[::step, :MAX_CHANNELS_DRAWN]
+        for k in range(shown.shape[1]):
+            ax.plot(t[::step], shown[:, k], lw=0.7, label=channels[k] if k < len(channels) else str(k))
+        if "sample_labels" in s:
+            for lname, ds in s["sample_labels"].items():
+                if "classes" in ds.attrs:
+                    classes = [c.decode() if isinstance(c, bytes) else str(c) for c in ds.attrs["classes"]]
+                    _shade_labels(ax, t, ds[()], classes)
+                    break
+        more = data.shape[1] - shown.shape[1]
+        unit = f" ({units[0]})" if len(set(units)) == 1 else ""
+        ax.set_ylabel(f"{name}{unit}")
+        ax.set_title(f"{name}: {data.shape[0]} samples x {data.shape[1]} channels"
+                     + (f" ({more} not drawn)" if more > 0 else ""), fontsize=9)
+        ax.legend(loc="upper right", fontsize=7, ncol=4)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+
+
+def _frames_figure(g: h5py.Group, title: str, out: Path) -> None:
+    images, ref = g["images"], g["reference"][()]
+    diffs = np.array([np.abs(images[i].astype(np.int16) - ref).mean() for i in range(images.shape[0])])
+    k = int(np.argmax(diffs)) if diffs.size else 0
+    frame = images[k] if images.shape[0] else ref
+    diff = np.abs(frame.astype(np.int16) - ref).sum(axis=2)
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.4), gridspec_kw={"width_ratios": [1, 1, 1, 1.3]})
+    axes[0].imshow(ref)
+    axes[0].set_title("reference (no contact)", fontsize=9)
+    axes[1].imshow(frame)
+    axes[1].set_title(f"frame {k} (largest change)", fontsize=9)
+    axes[2].imshow(diff, cmap="magma")
+    axes[2].set_title("|frame - reference|", fontsize=9)
+    for a in axes[:3]:
+        a.axis("off")
+    axes[3].plot(g["t_s"][()], diffs)
+    axes[3].set_xlabel("time (s)")
+    axes[3].set_ylabel("mean |frame - ref|")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+
+
+def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> list[Figure]:
+    """Write quick-look PNGs of the first ``max_trials`` trials of a file into ``out_dir``."""
+    path = Path(path)
+    check_readable(path)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figures: list[Figure] = []
+    with h5py.File(path, "r") as h5:
+        for name in list(h5["trials"])[:max_trials]:
+            g = h5["trials"][name]
+            labels = ", ".join(f"{k}={v}" for k, v in g["labels"].attrs.items())
+            title = f"{path.name} / {name}" + (f" ({labels})" if labels else "")
+            if "events" in g:
+                sensor = h5["sensors"][g["events"].attrs["sensor"]]
+                f = out_dir / f"{path.stem}__{name}__events.png"
+                _events_figure(g["events"], int(sensor.attrs["width_px"]), int(sensor.attrs["height_px"]),
+                               title, f)
+                figures.append(Figure(f, f"{title}: events per 20 ms and net polarity per pixel"))
+            if "signals" in g:
+                f = out_dir / f"{path.stem}__{name}__signals.png"
+                _signals_figure(h5, g["signals"], title, f)
+                figures.append(Figure(f, f"{title}: sampled streams"))
+            if "frames" in g:
+                f = out_dir / f"{path.stem}__{name}__frames.png"
+                _frames_figure(g["frames"], title, f)
+                figures.append(Figure(f, f"{title}: image frames"))
+    return figures
+
+
+def write_html(files: list[Path], out_dir: str | Path, *, max_trials: int = 4,
+               title: str = "tactile quick look") -> Path:
+    """One self-contained HTML page (figures embedded) with a summary and figures per file."""
+    out_dir = Path(out_dir)
+    parts = [f"<!doctype html><meta charset='utf-8'><title>{html.escape(title)}</title>",
+             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
+             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;font-size:13px}"
+             "img{max-width:100%}</style>", f"<h1>{html.escape(title)}</h1>"]
+    for f in files:
+        s = summarize(f)
+        parts.append(f"<h2>{html.escape(f.name)}</h2><p>schema {s.schema_version}, tactile "
+                     f"{html.escape(s.tool_version)}, {len(s.trials)} trials, {s.total_duration_s:.2f} s, "
+                     f"{s.n_sources} source files; command: <code>{html.escape(s.command)}</code></p>")
+        parts.append("<table><tr><th>sensor</th><th>kind</th><th>rate (Hz)</th><th>channels</th>"
+                     "<th>geometry</th></tr>")
+        for sensor in s.sensors:
+            parts.append(f"<tr><td>{html.escape(sensor.name)}</td><td>{sensor.kind}</td>"
+                         f"<td>{sensor.sample_rate_hz:g}</td><td>{sensor.n_channels}</td>"
+                         f"<td>{sensor.geometry}</td></tr>")
+        parts.append("</table>")
+        if s.label_counts:
+            parts.append("<p>label counts: <code>" + html.escape(json.dumps(s.label_counts)) + "</code></p>")
+        for fig in quicklook(f, out_dir, max_trials=max_trials):
+            data = base64.b64encode(fig.path.read_bytes()).decode()
+            parts.append(f"<figure><img src='data:image/png;base64,{data}'>"
+                         f"<figcaption>{html.escape(fig.caption)}</figcaption></figure>")
+    page = out_dir / "index.html"
+    buf = io.StringIO("\n".join(parts))
+    tmp = page.with_name(".index.html.tmp")
+    tmp.write_text(buf.getvalue(), encoding="utf-8")
+    tmp.replace(page)
+    return page
