@@ -31,9 +31,30 @@ test: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check tactile_cli tests benchmarks
 
-DEMO ?= demo_out
+# The demo: sample recordings of every format (generated), the real recordings from other
+# labs in ../shared/data when present, each ingested into HDF5, validated, summarised and
+# drawn into one HTML report.
+DEMO   ?= demo_out
+SHARED ?= ../shared/data
 demo: $(STAMP)
-	$(BIN)/python -m tactile_cli.demo --out $(DEMO)
+	rm -rf $(DEMO)
+	mkdir -p $(DEMO)/h5
+	$(TACTILE) samples $(DEMO)/raw --seed 0
+	$(TACTILE) ingest $(DEMO)/raw/events.csv --width 640 --height 480 --label origin=synthetic --out $(DEMO)/h5/events_csv.h5
+	$(TACTILE) ingest $(DEMO)/raw/events.npy --width 640 --height 480 --label origin=synthetic --out $(DEMO)/h5/events_npy.h5
+	$(TACTILE) ingest $(DEMO)/raw/accel_tree --format accel-tree --out $(DEMO)/h5/accel_tree.h5
+	$(TACTILE) ingest $(DEMO)/raw/taxel --mapping $(DEMO)/raw/taxel/taxels.yaml --out $(DEMO)/h5/taxel.h5
+	$(TACTILE) ingest $(DEMO)/raw/visuotactile/press_01 $(DEMO)/raw/visuotactile/press_02 --out $(DEMO)/h5/visuotactile.h5
+	@if [ -d "$(SHARED)" ]; then \
+	  set -e; echo "real recordings from $(SHARED):"; \
+	  $(TACTILE) ingest $(SHARED)/aedat4/dvxplorer_sample.aedat4 --out $(DEMO)/h5/dvxplorer.h5; \
+	  $(TACTILE) ingest $(SHARED)/xela_slip --mapping configs/xela_slip.yaml --out $(DEMO)/h5/xela_slip.h5; \
+	  $(TACTILE) ingest $(SHARED)/biotac_slide20 --mapping configs/biotac_slide20.yaml --out $(DEMO)/h5/biotac_slide20.h5; \
+	else echo "($(SHARED) not found: real recordings skipped)"; fi
+	$(TACTILE) validate $(DEMO)/h5/*.h5
+	for f in $(DEMO)/h5/*.h5; do $(TACTILE) info "$$f"; done
+	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/report --max-trials 2
+	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py

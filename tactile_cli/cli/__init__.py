@@ -13,6 +13,7 @@ import typer
 from .._version import __version__
 from . import info as _info
 from . import plot as _plot
+from . import samples as _samples
 from . import ingest as _ingest
 from . import validate as _validate
 
@@ -44,6 +45,8 @@ app.command("ingest", help="Raw recordings (AEDAT4/CSV/NPY events, sensor CSVs, 
     _ingest.ingest_command)
 app.command("info", help="Sensors, trials, labels and durations of a tactile HDF5 file.")(_info.info_command)
 app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 files.")(_plot.plot_command)
+app.command("samples", help="Write small synthetic recordings of every input format.")(
+    _samples.samples_command)
 app.command("validate", help="Check HDF5 files against the tactile schema; list every violation.")(
     _validate.validate_command)
 

@@ -25,6 +25,8 @@ def ingest_command(
     width: Annotated[int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")] = None,
     height: Annotated[int | None, typer.Option(help="Event sensor height in px (CSV/NPY events).")] = None,
     sensor: Annotated[str | None, typer.Option(help="Sensor name to record (default from the input).")] = None,
+    fps: Annotated[float | None, typer.Option(
+        min=0.001, help="Frame rate of image folders without a timestamps.csv (default 30).")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     compression: Annotated[int, typer.Option(
         min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed.")] = 4,
@@ -42,7 +44,8 @@ def ingest_command(
 
     def body() -> None:
         options = IngestOptions(format=fmt, mapping=mapping, labels=parse_labels(label or []),
-                                width_px=width, height_px=height, sensor_name=sensor)
+                                width_px=width, height_px=height, sensor_name=sensor,
+                                frame_rate_hz=fps)
         with RichProgress(enabled=progress) as bar:
             path = ingest(inputs, out, options=options, overwrite=overwrite,
                           compression=Compression(None if compression < 0 else compression),

@@ -16,7 +16,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.writer import Compression, StoreWriter
+from ..store.writer import Compression, StoreWriter, safe_name
 
 #: format name -> "module:function" (imported on use, so the CLI starts fast)
 FORMATS: dict[str, str] = {
@@ -42,6 +42,7 @@ class IngestOptions:
     height_px: int | None = None
     sensor_name: str | None = None
     chunk_events: int = 1 << 20  # events read per chunk while streaming
+    frame_rate_hz: float | None = None  # image folders without timestamps.csv (default 30 Hz)
 
     def as_config(self) -> dict[str, Any]:
         out = asdict(self)
@@ -60,7 +61,8 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
     kinds = set()
     for path in inputs:
         if path.is_dir():
-            if any(p.suffix.lower() in IMAGE_SUFFIXES for p in path.iterdir()):
+            if any(p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".")
+                   for p in path.iterdir()):
                 kinds.add("images")
             else:
                 raise InputError("cannot tell the format of a folder; pass --format accel-tree, "
@@ -103,12 +105,12 @@ def ingest(
         if not path.exists():
             raise InputError("file not found", path=path)
     fmt = detect_format(paths, options)
-    module_name, func_name = FORMATS[fmt].split(":")
-    reader = getattr(importlib.import_module(module_name), func_name)
     config = {"format": fmt, **options.as_config(), "compression_level": compression.level,
               "inputs": [str(p) for p in paths]}
     with StoreWriter(out, command=command, config=config, overwrite=overwrite,
                      compression=compression) as writer:
+        module_name, func_name = FORMATS[fmt].split(":")
+        reader = getattr(importlib.import_module(module_name), func_name)
         reader(paths, writer, options, progress)
         trials = writer.h5["trials"]
         if len(trials) == 0:
@@ -116,7 +118,7 @@ def ingest(
         if options.labels:
             for group in trials.values():
                 for key, value in options.labels.items():
-                    group["labels"].attrs[key] = value
+                    group["labels"].attrs[safe_name(key)] = value
         return writer.commit()
 
 

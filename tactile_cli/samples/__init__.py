@@ -1,5 +1,57 @@
 """Small synthetic raw recordings of every format `tactile ingest` reads.
 
-Used by the tests (round trips: known content in, same content out) and by `make demo`.
-Each writer returns the ground truth it wrote, so a caller can compare after ingest.
+Used by the tests (round trips: known content in, same content out), by `tactile samples`
+and by `make demo`. Each writer returns the ground truth it wrote, so a caller can compare
+after ingest. Everything is deterministic for a given seed.
 """
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from .events import write_events_csv as write_events_csv
+from .events import write_events_npy as write_events_npy
+from .images import write_image_sequence as write_image_sequence
+from .signals import write_accel_tree as write_accel_tree
+from .signals import write_taxel_recording as write_taxel_recording
+
+EVENT_WIDTH, EVENT_HEIGHT = 640, 480
+
+
+def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) -> dict[str, Any]:
+    """Write one small recording of every input format under ``out_dir``.
+
+    Layout (the command that ingests each is in the returned ``commands``)::
+
+        events.csv          t,x,y,p events, polarity 0/1, 640x480
+        events.npy          structured array t,x,y,p, polarity -1/+1, 640x480
+        accel_tree/         object/orientation/speed/data.csv, 8 kHz (paper 001 layout)
+        taxel/              4x4 taxel CSVs at 100 Hz and their mapping taxels.yaml
+        visuotactile/press_01, press_02   PNG frames + reference.png
+
+    Returns ``{"paths": {...}, "commands": {name: [args after "tactile"]}}``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    geometry = ["--width", str(EVENT_WIDTH), "--height", str(EVENT_HEIGHT)]
+    write_events_csv(out / "events.csv", n_events, width=EVENT_WIDTH, height=EVENT_HEIGHT, seed=seed,
+                     polarity="01", mean_dt_us=5)
+    write_events_npy(out / "events.npy", n_events, width=EVENT_WIDTH, height=EVENT_HEIGHT, seed=seed + 1,
+                     mean_dt_us=5)
+    write_accel_tree(out / "accel_tree", seconds=0.5, seed=seed)
+    taxel = write_taxel_recording(out / "taxel", seed=seed)
+    for k in (1, 2):
+        write_image_sequence(out / "visuotactile" / f"press_{k:02d}", n_frames=12, width=160, height=120,
+                             seed=seed + k, frame_rate_hz=30.0)
+    return {
+        "paths": {"root": out},
+        "commands": {
+            "events_csv": ["ingest", str(out / "events.csv"), *geometry],
+            "events_npy": ["ingest", str(out / "events.npy"), *geometry],
+            "accel": ["ingest", str(out / "accel_tree"), "--format", "accel-tree"],
+            "taxel": ["ingest", str(out / "taxel"), "--mapping", str(taxel["mapping"])],
+            "visuotactile": ["ingest", str(out / "visuotactile" / "press_01"),
+                             str(out / "visuotactile" / "press_02")],
+        },
+    }

@@ -19,10 +19,14 @@ import os
 import re
 import shlex
 import sys
+import threading
+import zlib
+from collections import deque
 from collections.abc import Mapping, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import h5py
 import numpy as np
@@ -32,7 +36,8 @@ from ..errors import InputError, SchemaError
 from .spec import load_spec
 from .validate import validate_file
 
-#: Elements per chunk of a 1-D event column (int64: 2 MiB before compression).
+#: Events per chunk of a 1-D event column (the t column: 2 MiB before compression). A
+#: 50 ms window read decompresses one or two chunks per column; a chunk is one deflate job.
 EVENT_CHUNK = 1 << 18
 #: Target bytes per chunk of a 2-D signal dataset.
 SIGNAL_CHUNK_BYTES = 1 << 18
@@ -337,30 +342,114 @@ class TrialWriter:
 
     def write_frames(self, *, sensor: str, images: np.ndarray, t_s: np.ndarray,
                      reference: np.ndarray) -> None:
-        """Write an image sequence.
+        """Write a whole image sequence held in memory (:meth:`frames` streams a long one).
 
         images: (n_frames, height, width, 3) uint8 RGB; reference: (height, width, 3) uint8,
         the no-contact frame; t_s: (n_frames,) seconds from the trial's time origin.
         """
-        group = self.group.create_group("frames")
-        group.attrs["sensor"] = sensor
-        images = np.asarray(images, dtype=np.uint8)
-        comp = self.store.compression.kwargs()
-        chunks = (1, *images.shape[1:]) if images.size else None
-        group.create_dataset("images", data=images, chunks=chunks, **(comp if images.size else {}))
-        group.create_dataset("t_s", data=np.asarray(t_s, dtype=np.float64))
-        group.create_dataset("reference", data=np.asarray(reference, dtype=np.uint8))
-        if len(t_s):
-            self._extend_duration(float(t_s[-1]))
+        appender = self.frames(sensor, reference=reference)
+        appender.append(images, t_s)
+        appender.close()
+
+    def frames(self, sensor: str, *, reference: np.ndarray) -> FrameAppender:
+        """An appender for this trial's image sequence from ``sensor`` (a visuotactile
+        sensor); ``reference`` is the (height, width, 3) uint8 no-contact frame, which fixes
+        the frame size. Memory stays bounded by the batch the caller appends."""
+        return FrameAppender(self, sensor, reference)
+
+
+class FrameAppender:
+    """Append the frames of one image sequence in batches (one frame per HDF5 chunk).
+
+    Datasets of ``/trials/{trial}/frames``: ``images`` (n_frames, height, width, 3) uint8
+    RGB, ``t_s`` (n_frames,) float64 seconds from the trial's time origin, and
+    ``reference`` (height, width, 3) uint8. :meth:`close` sets the trial duration.
+    Wrong shapes, dtypes or times are programming errors here (``ValueError``): readers
+    check user files first and raise :class:`InputError` naming the file.
+    """
+
+    #: float64 timestamps per chunk of ``t_s`` (8 KiB; uncompressed chunks are allocated whole)
+    TIME_CHUNK = 1024
+
+    def __init__(self, trial: TrialWriter, sensor: str, reference: np.ndarray):
+        reference = np.asarray(reference)
+        if reference.dtype != np.uint8 or reference.ndim != 3 or reference.shape[2] != 3:
+            raise ValueError(f"`reference` must be (height, width, 3) uint8, got shape "
+                             f"{reference.shape} dtype {reference.dtype}")
+        self.trial = trial
+        self.frame_shape: tuple[int, int, int] = tuple(reference.shape)  # type: ignore[assignment]
+        self.group = trial.group.create_group("frames")
+        self.group.attrs["sensor"] = sensor
+        comp = trial.store.compression.kwargs()
+        self._images = self.group.create_dataset(
+            "images", shape=(0, *self.frame_shape), maxshape=(None, *self.frame_shape),
+            dtype=np.uint8, chunks=(1, *self.frame_shape), **comp)
+        self._t_s = self.group.create_dataset("t_s", shape=(0,), maxshape=(None,), dtype=np.float64,
+                                              chunks=(self.TIME_CHUNK,))
+        self.group.create_dataset("reference", data=reference)
+        self.n = 0
+        self.t_first: float | None = None
+        self.t_last: float | None = None
+
+    def append(self, images: np.ndarray, t_s: np.ndarray) -> None:
+        """Append frames: images (k, height, width, 3) uint8 RGB (or one (height, width, 3)
+        frame), t_s (k,) seconds, finite and not earlier than the previous frame."""
+        images = np.asarray(images)
+        if images.ndim == 3:
+            images = images[None]
+        t_s = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+        if images.dtype != np.uint8 or images.shape[1:] != self.frame_shape:
+            raise ValueError(f"`images` must be (k, {', '.join(map(str, self.frame_shape))}) uint8 "
+                             f"like the reference, got shape {images.shape} dtype {images.dtype}")
+        if t_s.shape != (len(images),):
+            raise ValueError(f"`t_s` has shape {t_s.shape}, expected ({len(images)},): one time "
+                             "per frame")
+        if len(t_s) == 0:
+            return
+        if not np.isfinite(t_s).all():
+            raise ValueError("`t_s` has non-finite values (NaN or inf)")
+        previous = self.t_last if self.t_last is not None else t_s[0]
+        if (np.diff(t_s, prepend=previous) < 0).any():
+            raise ValueError("`t_s` decreases; frame times must not decrease")
+        start, k = self.n, len(images)
+        self._images.resize((start + k, *self.frame_shape))
+        self._images[start:] = images
+        self._t_s.resize((start + k,))
+        self._t_s[start:] = t_s
+        if self.t_first is None:
+            self.t_first = float(t_s[0])
+        self.t_last = float(t_s[-1])
+        self.n += k
+
+    def close(self) -> int:
+        """Set the trial duration (as for signals: from min(0, first time) to the last
+        time); returns the frame count."""
+        if self.t_first is not None and self.t_last is not None:
+            self.trial._extend_duration(self.t_last - min(0.0, self.t_first))
+        return self.n
 
 
 class EventAppender:
     """Append address events in chunks, checking them as they arrive.
 
     Columns are stored as one 1-D dataset each: ``x``, ``y`` (uint16 px), ``t`` (int64 us),
-    ``p`` (int8, -1/+1). :meth:`close` writes ``ms_to_idx``, the index from milliseconds
-    since the first event to the first event index (as the DSEC format keeps).
+    ``p`` (int8, -1/+1), chunked by :data:`EVENT_CHUNK` events. :meth:`close` writes
+    ``ms_to_idx``, the index from milliseconds since the first event to the first event
+    index (as the DSEC format keeps).
+
+    Why it is fast: events are staged into whole chunks; each chunk is shuffled (HDF5's
+    byte transpose) and deflated in a thread pool, where zlib runs without the GIL, so the
+    cores compress while the caller parses its next block; the main thread writes the
+    finished chunks in order with HDF5's direct chunk write. The stored bytes are exactly
+    those HDF5's own shuffle + gzip filters produce (zlib ``compress2`` at the same level,
+    last chunk zero-padded like HDF5's fill value), so any HDF5 reader opens the file.
     """
+
+    _COLUMNS: ClassVar[tuple[tuple[str, type[np.integer]], ...]] = (
+        ("x", np.uint16), ("y", np.uint16), ("t", np.int64), ("p", np.int8))
+    _pool: ClassVar[ThreadPoolExecutor | None] = None
+    _pool_pid: ClassVar[int] = 0
+    _pool_lock: ClassVar[threading.Lock] = threading.Lock()
 
     def __init__(self, trial: TrialWriter, sensor: str):
         self.trial = trial
@@ -371,41 +460,63 @@ class EventAppender:
         self.group = trial.group.create_group("events")
         self.group.attrs["sensor"] = sensor
         comp = trial.store.compression.kwargs()
+        self._level = trial.store.compression.level  # None: chunks are stored raw
         self._ds = {
             name: self.group.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype,
                                             chunks=(EVENT_CHUNK,), **comp)
-            for name, dtype in (("x", np.uint16), ("y", np.uint16), ("t", np.int64), ("p", np.int8))
+            for name, dtype in self._COLUMNS
         }
         self.n = 0
         self.t_first: int | None = None
         self.t_last: int | None = None
         self._ms_index: list[np.ndarray] = []
         self._next_ms = 0  # the next millisecond boundary whose first index is unknown
+        self._stage = {name: np.empty(EVENT_CHUNK, dtype) for name, dtype in self._COLUMNS}
+        self._spare: dict[str, list[np.ndarray]] = {name: [] for name, _ in self._COLUMNS}
+        self._fill = 0  # events waiting in the staging buffers
+        self._next_chunk = 0  # index of the chunk the staging buffers will become
+        self._extent = 0  # current length of the datasets
+        # (column, chunk index, buffer, deflate job or None when stored raw), in write order
+        self._pending: deque[tuple[str, int, np.ndarray, Future[bytes] | None]] = deque()
+        # enough chunks in flight to keep every worker busy, few enough to bound memory
+        self._max_pending = 8 * self._pool_size()
 
     def append(self, x: np.ndarray, y: np.ndarray, t: np.ndarray, p: np.ndarray, *,
-               source: str | Path | None = None, first_row: int = 0, row_label: str = "row") -> None:
-        """Check and append one chunk.
+               source: str | Path | None = None, first_row: int = 0,
+               row_label: str = "row") -> None:
+        """Check and append one chunk of any length.
 
-        x, y: pixel coordinates; t: microseconds, non-decreasing across chunks;
-        p: polarity already in {-1, +1}. ``source`` and ``first_row`` locate errors
-        (row numbers count from ``first_row`` for the chunk's first event).
+        x, y: (n,) integer pixel coordinates; t: (n,) integer microseconds, non-decreasing
+        across chunks; p: (n,) polarity already in {-1, +1}. ``source`` and ``first_row``
+        locate errors (row numbers count from ``first_row`` for the chunk's first event).
+        The arrays are copied before this returns, so the caller may reuse them.
         """
         n = len(t)
         if not (len(x) == len(y) == len(p) == n):
-            raise InputError(f"event columns differ in length (x {len(x)}, y {len(y)}, t {n}, p {len(p)})",
-                             path=source)
+            raise InputError(f"event columns differ in length (x {len(x)}, y {len(y)}, t {n}, "
+                             f"p {len(p)})", path=source)
         if n == 0:
             return
-        x = np.asarray(x)
-        y = np.asarray(y)
-        t = np.asarray(t, dtype=np.int64)
-        p = np.asarray(p)
+        x, y, t, p = np.asarray(x), np.asarray(y), np.asarray(t), np.asarray(p)
+        for name, values, unit in (("x", x, "px"), ("y", y, "px"), ("t", t, "microseconds"),
+                                   ("p", p, "-1/+1")):
+            if values.dtype.kind not in "iufb":
+                raise InputError(f"column {name} has dtype {values.dtype}; expected integers "
+                                 f"({unit})", path=source)
+            if values.dtype.kind == "f":
+                # the integer cast would truncate 3.5 to 3 and turn NaN into garbage silently
+                fraction = values != np.trunc(values)
+                if fraction.any():
+                    i = int(np.flatnonzero(fraction)[0])
+                    raise InputError(f"{name} = {values[i]} is not a whole number ({unit})",
+                                     path=source, where=f"{row_label} {first_row + i}")
+        if t.dtype == np.uint64 and t.max() > np.iinfo(np.int64).max:
+            fail_at = int(np.flatnonzero(t > np.iinfo(np.int64).max)[0])
+            raise InputError(f"timestamp {t[fail_at]} us does not fit int64", path=source,
+                             where=f"{row_label} {first_row + fail_at}")
+        t = t.astype(np.int64, copy=False)
         self._check(x, y, t, p, source, first_row, row_label)
         start = self.n
-        for name, values in (("x", x), ("y", y), ("t", t), ("p", p)):
-            ds = self._ds[name]
-            ds.resize((start + n,))
-            ds[start:] = values.astype(ds.dtype, copy=False)
         if self.t_first is None:
             self.t_first = int(t[0])
         self.t_last = int(t[-1])
@@ -416,22 +527,26 @@ class EventAppender:
             self._ms_index.append(start + np.searchsorted(t, edges, side="left"))
             self._next_ms = int(last_ms) + 1
         self.n += n
+        self._stage_events({"x": x, "y": y, "t": t, "p": p}, n)
 
     def _check(self, x, y, t, p, source, first_row, row_label) -> None:
         def fail(mask: np.ndarray, what: str) -> None:
             i = int(np.flatnonzero(mask)[0])
             raise InputError(what.format(i=i), path=source, where=f"{row_label} {first_row + i}")
 
-        bad = (x < 0) | (x >= self.width)
-        if bad.any():
-            fail(bad, f"x = {x[np.flatnonzero(bad)[0]]} is outside the sensor (width {self.width} px)")
-        bad = (y < 0) | (y >= self.height)
-        if bad.any():
-            fail(bad, f"y = {y[np.flatnonzero(bad)[0]]} is outside the sensor (height {self.height} px)")
-        bad = (p != 1) & (p != -1)
-        if bad.any():
+        # min/max first: one pass each, no temporaries; the mask only to name the row
+        if x.min() < 0 or x.max() >= self.width:
+            bad = (x < 0) | (x >= self.width)
+            fail(bad, f"x = {x[np.flatnonzero(bad)[0]]} is outside the sensor "
+                 f"(width {self.width} px)")
+        if y.min() < 0 or y.max() >= self.height:
+            bad = (y < 0) | (y >= self.height)
+            fail(bad, f"y = {y[np.flatnonzero(bad)[0]]} is outside the sensor "
+                 f"(height {self.height} px)")
+        if p.min() < -1 or p.max() > 1 or not p.all():
+            bad = (p != 1) & (p != -1)
             fail(bad, f"polarity {p[np.flatnonzero(bad)[0]]} is not -1/+1 after conversion")
-        back = np.diff(t) < 0
+        back = t[1:] < t[:-1]
         if back.any():
             i = int(np.flatnonzero(back)[0])
             raise InputError(f"timestamp {t[i + 1]} us is earlier than the previous {t[i]} us "
@@ -439,10 +554,87 @@ class EventAppender:
                              where=f"{row_label} {first_row + i + 1}")
         if self.t_last is not None and t[0] < self.t_last:
             raise InputError(f"timestamp {t[0]} us is earlier than the previous {self.t_last} us "
-                             "(timestamps must not decrease)", path=source, where=f"{row_label} {first_row}")
+                             "(timestamps must not decrease)", path=source,
+                             where=f"{row_label} {first_row}")
+
+    # -- chunk pipeline ---------------------------------------------------------------
+    def _stage_events(self, columns: dict[str, np.ndarray], n: int) -> None:
+        pos = 0
+        while pos < n:
+            take = min(EVENT_CHUNK - self._fill, n - pos)
+            for name, values in columns.items():
+                np.copyto(self._stage[name][self._fill:self._fill + take], values[pos:pos + take],
+                          casting="unsafe")  # ranges were checked, the casts are exact
+            self._fill += take
+            pos += take
+            if self._fill == EVENT_CHUNK:
+                self._submit_chunk()
+
+    def _submit_chunk(self) -> None:
+        k = self._next_chunk
+        for name, dtype in self._COLUMNS:
+            buf = self._stage[name]
+            job = (None if self._level is None
+                   else self._executor().submit(self._deflate, buf, self._level))
+            self._pending.append((name, k, buf, job))
+            spare = self._spare[name]
+            self._stage[name] = spare.pop() if spare else np.empty(EVENT_CHUNK, dtype)
+        self._next_chunk += 1
+        self._fill = 0
+        self._write_ready(self._max_pending)
+
+    def _write_ready(self, keep: int) -> None:
+        """Write finished chunks in order until at most ``keep`` jobs are in flight."""
+        while len(self._pending) > keep:
+            name, k, buf, job = self._pending.popleft()
+            data = buf if job is None else job.result()
+            needed = min((k + 1) * EVENT_CHUNK, self.n)
+            if needed > self._extent:  # a direct chunk write needs the chunk inside the extent
+                for ds in self._ds.values():
+                    ds.resize((needed,))
+                self._extent = needed
+            self._ds[name].id.write_direct_chunk((k * EVENT_CHUNK,), data)
+            self._spare[name].append(buf)
+
+    @staticmethod
+    def _deflate(buf: np.ndarray, level: int) -> bytes:
+        """One chunk encoded as HDF5's shuffle then deflate filters encode it.
+
+        buf: (EVENT_CHUNK,) column values. Shuffle writes byte 0 of every element, then
+        byte 1, ...; deflate is zlib ``compress2`` (zlib header and Adler-32) at ``level``.
+        """
+        if buf.itemsize > 1:
+            buf = np.ascontiguousarray(buf.view(np.uint8).reshape(-1, buf.itemsize).T)
+        return zlib.compress(buf, level)
+
+    @staticmethod
+    def _pool_size() -> int:
+        try:
+            return max(1, len(os.sched_getaffinity(0)))  # the CPUs this process may use
+        except AttributeError:  # not on Linux
+            return max(1, os.cpu_count() or 1)
+
+    @classmethod
+    def _executor(cls) -> ThreadPoolExecutor:
+        """The process-wide deflate pool, created on first use (and again after a fork,
+        whose child does not inherit the parent's threads)."""
+        with cls._pool_lock:
+            if cls._pool is None or cls._pool_pid != os.getpid():
+                cls._pool = ThreadPoolExecutor(max_workers=cls._pool_size(),
+                                               thread_name_prefix="tactile-deflate")
+                cls._pool_pid = os.getpid()
+            return cls._pool
 
     def close(self) -> int:
-        """Write the millisecond index and the trial duration; returns the event count."""
+        """Write the last chunk, the millisecond index and the trial duration; returns the
+        event count."""
+        if self._fill:
+            for name, _ in self._COLUMNS:
+                self._stage[name][self._fill:] = 0  # HDF5's fill value, as its own filter pads
+            self._submit_chunk()
+        self._write_ready(0)
+        self._stage.clear()
+        self._spare.clear()
         idx = np.concatenate(self._ms_index) if self._ms_index else np.zeros(0, dtype=np.int64)
         self.group.create_dataset("ms_to_idx", data=idx.astype(np.int64))
         self.group.attrs["ms_index_origin_us"] = np.int64(self.t_first or 0)

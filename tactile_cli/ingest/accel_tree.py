@@ -1,0 +1,166 @@
+"""The accelerometer CSV tree of paper 001 (fingertip accelerometers, slip/slide) into the store.
+
+Layout (paper 001, sec. 4 and Fig. 4), one trial per CSV file::
+
+    <root>/<object>/<orientation>/<speed>/<file>.csv
+
+The three folder names become the trial labels ``object``, ``orientation`` and ``speed``,
+stored as the folder text (``"wood"``, ``"15"``, ``"0.32"``). Every ``.csv`` under a root
+must sit at exactly that depth (anything else is an error, not a skipped file); hidden
+files (``.*``) are not read.
+
+Columns, taken by position (the public dataset's header names are not known): ::
+
+    L_x, L_y, L_z, R_x, R_y, R_z, v_slip, v_slide
+
+- six accelerations of the left (L) and right (R) fingertip accelerometers, which the
+  paper scaled from [-5 g, 5 g] to [-1, 1] (sec. 4). They are stored as written, in the
+  unit :data:`ACCEL_UNIT` = ``"fs5g"``: a fraction of the +-5 g full scale, so
+  acceleration in g = 5 x value (the sensor also records ``full_scale_g`` = 5);
+- the slip velocity (grasped object) and slide velocity (slider), in m/s.
+
+A header row is optional: a first line whose 8 fields are all numbers is data. Rows
+sampled at 8 kHz (sec. 3.1) unless another rate is given.
+
+Two streams per trial: ``accel`` (sensor kind ``accelerometer``, 6 channels) with the
+per-sample label ``motion``, and ``velocity`` (kind ``robot_state``, 2 channels, m/s),
+on one time base ``t_s = i / rate``.
+
+Motion class (sec. 4, "5 cm/s speed threshold to define no-motion"), per sample, from the
+speeds ``|v_slip|`` and ``|v_slide|``:
+
+- ``no_motion`` when both are below 0.05 m/s;
+- ``slip`` when ``|v_slip| >= 0.05`` m/s, **also when** ``|v_slide|`` is above the threshold
+  too (the tie rule: slippage is the grasped object moving against the gripper, sec. 3.1,
+  and on slippery objects both motions occur in quick succession, sec. 4; the object's
+  motion is what a grasp controller must react to);
+- ``slide`` otherwise (only ``|v_slide| >= 0.05`` m/s).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..progress import Progress
+from ..store.writer import StoreWriter
+from . import IngestOptions
+from .mapped_csv import natural_key, read_csv_header, read_csv_table
+from .mapping import CsvDialect
+
+#: Column order of every CSV (by position).
+ACCEL_CHANNELS = ("L_x", "L_y", "L_z", "R_x", "R_y", "R_z")
+VELOCITY_CHANNELS = ("v_slip", "v_slide")
+COLUMNS = ACCEL_CHANNELS + VELOCITY_CHANNELS
+#: Acceleration unit: a fraction of the +-5 g full scale (g = FULL_SCALE_G x value).
+ACCEL_UNIT = "fs5g"
+FULL_SCALE_G = 5.0
+#: Sampling rate of the paper's acquisition board (sec. 3.1).
+SAMPLE_RATE_HZ = 8000.0
+#: Speed below which a motion does not count (sec. 4).
+MOTION_THRESHOLD_M_S = 0.05
+#: Classes of the ``motion`` sample label, in code order.
+MOTION_CLASSES = ("no_motion", "slide", "slip")
+MOTION_RULE = ("no_motion if |v_slip| < 0.05 m/s and |v_slide| < 0.05 m/s; slip if "
+               "|v_slip| >= 0.05 m/s (also when |v_slide| >= 0.05 m/s); else slide")
+ACCEL_SENSOR = "accel"
+VELOCITY_SENSOR = "velocity"
+
+
+def motion_class(v_slip_m_s: np.ndarray, v_slide_m_s: np.ndarray, *,
+                 threshold_m_s: float = MOTION_THRESHOLD_M_S) -> np.ndarray:
+    """(n,) int8 motion codes (indices into :data:`MOTION_CLASSES`) from (n,) velocities in m/s.
+
+    Slip wins when both speeds reach the threshold (see the module docstring).
+    """
+    slipping = np.abs(v_slip_m_s) >= threshold_m_s
+    sliding = np.abs(v_slide_m_s) >= threshold_m_s
+    codes = np.zeros(len(slipping), dtype=np.int8)
+    codes[sliding] = MOTION_CLASSES.index("slide")
+    codes[slipping] = MOTION_CLASSES.index("slip")
+    return codes
+
+
+def find_accel_csvs(root: Path) -> list[tuple[Path, str, str, str]]:
+    """Every trial CSV of one tree as (path, object, orientation, speed), in natural order."""
+    if not root.is_dir():
+        raise InputError("accel-tree inputs are root folders holding <object>/<orientation>/"
+                         "<speed>/<file>.csv", path=root)
+    found = []
+    for path in root.rglob("*"):
+        rel = path.relative_to(root)
+        if path.suffix.lower() != ".csv" or any(p.startswith(".") for p in rel.parts):
+            continue
+        if len(rel.parts) != 4 or not path.is_file():
+            raise InputError(f"CSV at the wrong depth: expected {root}/<object>/<orientation>/"
+                             "<speed>/<file>.csv", path=path)
+        found.append((path, *rel.parts[:3]))
+    if not found:
+        raise InputError("no <object>/<orientation>/<speed>/<file>.csv found under this folder",
+                         path=root)
+    return sorted(found, key=lambda f: natural_key(f[0]))
+
+
+def _dialect(path: Path) -> CsvDialect:
+    """Header or not, from the first line: 8 numbers are data."""
+    with open(path, "rb") as f:
+        first = f.readline().decode("utf-8-sig", errors="replace").strip()
+    fields = first.split(",")
+    if len(fields) != len(COLUMNS):
+        raise InputError(f"first line has {len(fields)} fields, expected {len(COLUMNS)} "
+                         f"({', '.join(COLUMNS)})", path=path, where="line 1")
+    try:
+        [float(v) for v in fields]
+    except ValueError:
+        return CsvDialect(header=True)
+    return CsvDialect(header=False, column_names=list(COLUMNS))
+
+
+def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
+                      progress: Progress, *, sample_rate_hz: float = SAMPLE_RATE_HZ) -> None:
+    """Ingest accelerometer CSV trees (``inputs`` are root folders); one trial per CSV.
+
+    Writes the streams ``accel`` (n, 6) in ``fs5g`` with the sample label ``motion`` and
+    ``velocity`` (n, 2) in m/s, both at ``sample_rate_hz`` (default 8 kHz).
+    """
+    if not sample_rate_hz > 0:
+        raise InputError(f"`sample_rate_hz` (={sample_rate_hz}) must be positive")
+    files = [f for root in inputs for f in find_accel_csvs(root)]
+    per_folder: dict[Path, int] = {}
+    for path, *_ in files:
+        per_folder[path.parent] = per_folder.get(path.parent, 0) + 1
+    accel = writer.add_sensor(
+        ACCEL_SENSOR, kind="accelerometer", sample_rate_hz=sample_rate_hz,
+        channel_names=ACCEL_CHANNELS, channel_units=ACCEL_UNIT, full_scale_g=FULL_SCALE_G,
+        description="left (L) and right (R) fingertip 3-axis accelerometers (ADXL335), as a "
+                    "fraction of the +-5 g full scale: g = 5 x value (paper 001, sec. 3-4)")
+    velocity = writer.add_sensor(
+        VELOCITY_SENSOR, kind="robot_state", sample_rate_hz=sample_rate_hz,
+        channel_names=VELOCITY_CHANNELS, channel_units="m/s",
+        description="slip velocity (grasped object) and slide velocity (slider) from the "
+                    "linear encoders, m/s (paper 001, sec. 3.1)")
+    progress.start(len(files), "accelerometer CSV files")
+    for path, obj, orientation, speed in files:
+        dialect = _dialect(path)
+        names = read_csv_header(path, dialect)  # COLUMNS when there is no header
+        table = read_csv_table(path, dialect, numeric=names)
+        values = np.column_stack([table.columns[n] for n in names])  # (n, 8) by position
+        t_s = np.arange(table.n_rows, dtype=np.float64) / sample_rate_hz
+        motion = motion_class(values[:, 6], values[:, 7])
+        name = f"{obj}_{orientation}_{speed}"
+        if per_folder[path.parent] > 1:
+            name += f"_{path.stem}"
+        trial = writer.trial(name, labels={"object": obj, "orientation": orientation,
+                                           "speed": speed},
+                             sources=[writer.add_source(path)])
+        trial.write_signal("accel", sensor=accel, data=values[:, :6], t_s=t_s,
+                           sample_labels={"motion": (motion, MOTION_CLASSES)})
+        trial.group["signals/accel/sample_labels/motion"].attrs["rule"] = MOTION_RULE
+        trial.write_signal("velocity", sensor=velocity, data=values[:, 6:], t_s=t_s)
+        progress.advance(1)
+    progress.finish()
+
+
+__all__ = ["ACCEL_UNIT", "MOTION_CLASSES", "find_accel_csvs", "ingest_accel_tree", "motion_class"]

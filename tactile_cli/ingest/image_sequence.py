@@ -1,0 +1,381 @@
+"""Image-sequence folders of visuotactile sensors (DIGIT, GelSight) into the tactile store.
+
+Layout read (one folder = one trial, trial name = folder name)::
+
+    press_01/
+        reference.png          the no-contact frame (names below)
+        frame_1.png ... frame_240.png
+        timestamps.csv         optional frame times
+
+- **Frames**: every ``.png``/``.jpg``/``.jpeg`` file directly in the folder except the
+  reference, in natural name order (``frame_2`` before ``frame_10``). Hidden files
+  (``.*``, e.g. macOS ``._frame1.png``) and subfolders are not read. BMP/TIFF/GIF/WebP
+  files are an error rather than silently skipped frames.
+- **Reference (no-contact) frame**: exactly one PNG/JPG whose name without suffix is, in
+  any letter case, one of :data:`REFERENCE_STEMS` (``reference``, ``ref``, ``background``,
+  ``no_contact``); none or several is an error. :func:`scan_image_folder` also takes an
+  explicit reference file.
+- **Frame times** (``t_s``, seconds from the trial's time origin): from ``timestamps.csv``
+  when present, either one column (``t_s``, one row per frame in frame order) or two
+  columns (``file,t_s``); the header row is optional and ``t_s`` values are stored as
+  written. A header ``t_unix_s`` (or ``file,t_unix_s``) marks Unix epoch seconds instead:
+  they are stored relative to the first frame and the first frame's epoch time goes into
+  the trial attribute ``time_origin_unix_s`` (as the mapped-CSV ingest does). Times must be
+  finite and must not decrease in frame order. Without the file, frames are taken to be
+  evenly spaced at :data:`DEFAULT_FRAME_RATE_HZ` = 30 Hz, the rate DIGIT streams at
+  (paper 002, sec. III: "DIGIT runs at 30Hz"), and the trial records the assumption in
+  its attribute ``frame_rate_assumed_hz``.
+- **Pixels**: stored as (height, width, 3) uint8 RGB. Grayscale (``L``, ``1``) frames are
+  replicated to three channels, alpha (``RGBA``, ``LA``, palette transparency) is dropped
+  without compositing, palette/CMYK/YCbCr frames are converted by Pillow. 16-bit and
+  float images are an error (their values do not fit uint8 without a choice of scaling).
+  EXIF orientation tags are ignored: pixels are stored as encoded.
+
+All frames and reference frames of one ingest share one size, which becomes the sensor's
+``width_px``/``height_px`` (DIGIT: 320 x 240). Frames are decoded and written in small
+batches, so memory stays bounded for sequences of any length; every frame, reference and
+timestamps file is recorded as a source (``source_index`` of a trial lists its frames in
+order, then its reference, then its ``timestamps.csv`` if any).
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+from ..errors import InputError
+from ..progress import Progress
+from ..store.writer import StoreWriter
+from . import IMAGE_SUFFIXES, IngestOptions
+
+#: Frame rate assumed when a folder has no timestamps.csv: DIGIT's 30 Hz (paper 002).
+DEFAULT_FRAME_RATE_HZ = 30.0
+#: Names (without suffix, any letter case) of the no-contact reference frame.
+REFERENCE_STEMS = ("reference", "ref", "background", "no_contact")
+#: Optional per-folder frame-time file.
+TIMESTAMPS_FILE = "timestamps.csv"
+#: Image files that are refused rather than skipped, so no frame is silently dropped.
+UNSUPPORTED_IMAGE_SUFFIXES = {".bmp", ".tif", ".tiff", ".gif", ".webp"}
+#: Target bytes of decoded frames held before one write to HDF5.
+FRAME_BATCH_BYTES = 8 << 20
+
+_DIGITS = re.compile(r"([0-9]+)")
+_REFERENCE_HINT = ("name it reference.png (accepted names: "
+                   + ", ".join(REFERENCE_STEMS) + " with suffix .png, .jpg or .jpeg)")
+
+
+@dataclass(frozen=True)
+class ImageFolder:
+    """One trial's files, found and checked before any frame is decoded.
+
+    frames: frame files in natural name order; t_s: (n_frames,) float64 seconds from the
+    trial's time origin; frame_rate_assumed_hz: the rate ``t_s`` was made from when the
+    folder had no timestamps file and no rate was given, else None; time_origin_unix_s:
+    Unix time of ``t_s = 0`` when the timestamps file gave epoch times, else None.
+    """
+
+    folder: Path
+    frames: tuple[Path, ...]
+    reference: Path
+    timestamps_file: Path | None
+    t_s: np.ndarray
+    frame_rate_assumed_hz: float | None
+    time_origin_unix_s: float | None = None
+
+    @property
+    def trial_name(self) -> str:
+        return self.folder.resolve().name
+
+
+def natural_key(name: str) -> tuple[tuple[str | int, ...], str]:
+    """Sort key putting ``frame_2`` before ``frame_10``: digit runs compare as numbers,
+    the rest case-insensitively; the exact name breaks ties (``f01`` vs ``f1``)."""
+    parts = _DIGITS.split(name.casefold())
+    # re.split with one group alternates text (even) and digits (odd), so types line up
+    return tuple(int(p) if i % 2 else p for i, p in enumerate(parts)), name
+
+
+def scan_image_folder(
+    folder: Path,
+    *,
+    reference: Path | None = None,
+    frame_rate_hz: float | None = None,
+) -> ImageFolder:
+    """List a trial folder's frames, find its reference frame and settle the frame times.
+
+    reference: an explicit no-contact frame file (then the folder must not hold a
+    reference-named file too); by default it is found by name (:data:`REFERENCE_STEMS`).
+    frame_rate_hz: the rate of evenly spaced frames in Hz, for folders without
+    ``timestamps.csv`` (giving both is an error); by default
+    :data:`DEFAULT_FRAME_RATE_HZ` is assumed and recorded as assumed.
+    No image is decoded here, so a bad layout fails before any heavy work.
+    """
+    if not folder.is_dir():
+        raise InputError("the images format reads folders of PNG/JPG frames (one folder per "
+                         "trial); pass the folder, not a file", path=folder)
+    if frame_rate_hz is not None and not (np.isfinite(frame_rate_hz) and frame_rate_hz > 0):
+        raise InputError(f"`frame_rate_hz` (={frame_rate_hz}) must be a positive number of Hz")
+    images: list[Path] = []
+    timestamps: list[Path] = []
+    for path in folder.iterdir():
+        if path.name.startswith(".") or not path.is_file():
+            continue
+        suffix = path.suffix.lower()
+        if suffix in IMAGE_SUFFIXES:
+            images.append(path)
+        elif suffix in UNSUPPORTED_IMAGE_SUFFIXES:
+            raise InputError(f"{suffix} images are not read (frames must be PNG or JPG); convert "
+                             "the sequence to PNG (lossless) or move the file out", path=path)
+        elif path.name.lower() == TIMESTAMPS_FILE:
+            timestamps.append(path)
+    named_refs = sorted((p for p in images if p.stem.lower() in REFERENCE_STEMS),
+                        key=lambda p: natural_key(p.name))
+    frames = tuple(sorted((p for p in images if p.stem.lower() not in REFERENCE_STEMS),
+                          key=lambda p: natural_key(p.name)))
+    if reference is not None:
+        if named_refs:
+            raise InputError(f"a reference frame was given ({reference}) and the folder holds "
+                             f"{named_refs[0].name} too; keep one of them", path=folder)
+        if not reference.is_file() or reference.suffix.lower() not in IMAGE_SUFFIXES:
+            raise InputError("the reference frame must be an existing PNG or JPG file",
+                             path=reference)
+        frames = tuple(p for p in frames if p.resolve() != reference.resolve())
+        ref = reference
+    elif not named_refs:
+        raise InputError(f"no reference (no-contact) frame found; {_REFERENCE_HINT}", path=folder)
+    elif len(named_refs) > 1:
+        raise InputError(f"several reference frames ({', '.join(p.name for p in named_refs)}); "
+                         "keep exactly one", path=folder)
+    else:
+        ref = named_refs[0]
+    if not frames:
+        raise InputError(f"no frames besides the reference {ref.name}; add the PNG/JPG frames "
+                         "of the sequence", path=folder)
+    if len(timestamps) > 1:
+        raise InputError(f"several timestamp files ({', '.join(p.name for p in timestamps)}); "
+                         f"keep one named {TIMESTAMPS_FILE}", path=folder)
+    ts_file = timestamps[0] if timestamps else None
+    assumed: float | None = None
+    origin: float | None = None
+    if ts_file is not None:
+        if frame_rate_hz is not None:
+            raise InputError(f"both {TIMESTAMPS_FILE} and a frame rate ({frame_rate_hz} Hz) were "
+                             "given; drop one", path=ts_file)
+        times = read_timestamps(ts_file, frames)
+        t_s, origin = times.t_s, times.time_origin_unix_s
+    else:
+        rate = DEFAULT_FRAME_RATE_HZ if frame_rate_hz is None else float(frame_rate_hz)
+        assumed = rate if frame_rate_hz is None else None
+        t_s = np.arange(len(frames), dtype=np.float64) / rate
+    return ImageFolder(folder=folder, frames=frames, reference=ref, timestamps_file=ts_file,
+                       t_s=t_s, frame_rate_assumed_hz=assumed, time_origin_unix_s=origin)
+
+
+@dataclass(frozen=True)
+class FrameTimes:
+    """Frame times read from a timestamps file.
+
+    t_s: (n_frames,) float64 seconds from the trial's time origin; time_origin_unix_s: Unix
+    time in seconds of ``t_s = 0`` (the first frame) for epoch input, else None.
+    """
+
+    t_s: np.ndarray
+    time_origin_unix_s: float | None
+
+
+def read_timestamps(path: Path, frames: Sequence[Path]) -> FrameTimes:
+    """Frame times from a ``timestamps.csv``, in the order of ``frames``.
+
+    One column ``t_s`` (row k is frame k) or two columns ``file,t_s`` (every frame named
+    once); the header row is optional, except that epoch seconds need the header
+    ``t_unix_s`` (``file,t_unix_s``); blank lines are skipped.
+    """
+    rows: list[tuple[int, list[str]]] = []
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        for line_no, row in enumerate(csv.reader(f), start=1):
+            cells = [c.strip() for c in row]
+            if any(cells):
+                rows.append((line_no, cells))
+    if not rows:
+        raise InputError("is empty; write one time in seconds per frame (column t_s)", path=path)
+    header = [c.lower() for c in rows[0][1]]
+    epoch = header in (["t_unix_s"], ["file", "t_unix_s"])
+    if epoch or header in (["t_s"], ["file", "t_s"]):
+        rows = rows[1:]
+    n_cols = len(header)
+    if n_cols not in (1, 2):
+        raise InputError(f"has {n_cols} columns, expected 1 (t_s) or 2 (file,t_s)", path=path,
+                         where=f"line {rows[0][0] if rows else 1}")
+    names: list[str] = []
+    values = np.empty(len(rows), dtype=np.float64)
+    for i, (line_no, cells) in enumerate(rows):
+        if len(cells) != n_cols:
+            raise InputError(f"has {len(cells)} columns, expected {n_cols} like the first row",
+                             path=path, where=f"line {line_no}")
+        try:
+            values[i] = float(cells[-1])
+        except ValueError:
+            raise InputError(f"{cells[-1]!r} is not a time in seconds (a header, if any, must be "
+                             "t_s, file,t_s, t_unix_s or file,t_unix_s)", path=path,
+                             where=f"line {line_no}") from None
+        if not np.isfinite(values[i]):
+            raise InputError(f"time {cells[-1]!r} is not finite", path=path,
+                             where=f"line {line_no}")
+        if n_cols == 2:
+            names.append(cells[0])
+    if n_cols == 1:
+        if len(values) != len(frames):
+            raise InputError(f"has {len(values)} times but the folder has {len(frames)} frames; "
+                             "write one row per frame, in frame name order", path=path)
+        t_s = values
+    else:
+        index = {p.name: k for k, p in enumerate(frames)}
+        t_s = np.full(len(frames), np.nan)
+        for (line_no, _), name, value in zip(rows, names, values, strict=True):
+            if name not in index:
+                raise InputError(f"names {name!r}, which is not a frame in the folder",
+                                 path=path, where=f"line {line_no}")
+            if not np.isnan(t_s[index[name]]):
+                raise InputError(f"names {name!r} a second time", path=path,
+                                 where=f"line {line_no}")
+            t_s[index[name]] = value
+        missing = [frames[k].name for k in np.flatnonzero(np.isnan(t_s))]
+        if missing:
+            more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+            raise InputError(f"has no time for frame(s) {', '.join(missing[:3])}{more}; "
+                             "give every frame a row", path=path)
+    back = np.flatnonzero(np.diff(t_s) < 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise InputError(f"frame {frames[k].name} (t_s = {t_s[k]}) is earlier than the frame "
+                         f"before it, {frames[k - 1].name} (t_s = {t_s[k - 1]}); frames are read "
+                         "in natural name order and their times must not decrease", path=path)
+    if epoch:
+        return FrameTimes(t_s=t_s - t_s[0], time_origin_unix_s=float(t_s[0]))
+    return FrameTimes(t_s=t_s, time_origin_unix_s=None)
+
+
+def load_rgb(path: Path) -> np.ndarray:
+    """Decode one PNG/JPG file to (height, width, 3) uint8 RGB (conversions: module doc).
+
+    Raises :class:`InputError` naming the file when it is not a readable 8-bit image.
+    """
+    try:
+        with Image.open(path) as im:
+            if im.mode == "F" or im.mode.startswith("I"):
+                raise InputError(f"is a 16-bit or floating-point image (mode {im.mode}); save the "
+                                 "frames as 8-bit PNG", path=path)
+            if im.mode in ("P", "PA") and "transparency" in im.info:
+                # Pillow warns when a palette with transparency goes straight to RGB
+                im = im.convert("RGBA")
+            rgb = np.asarray(im.convert("RGB"), dtype=np.uint8)
+    except UnidentifiedImageError:
+        raise InputError("is not a PNG or JPG image Pillow can read (corrupt or mislabelled); "
+                         "replace or remove the file", path=path) from None
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
+        detail = " ".join(str(exc).split())
+        raise InputError(f"cannot decode the image ({detail}); the file is corrupt or "
+                         "truncated: replace or remove it", path=path) from None
+    return rgb
+
+
+def _check_size(image: np.ndarray, path: Path, size_hw: tuple[int, int], size_from: Path) -> None:
+    h, w = image.shape[:2]
+    if (h, w) != size_hw:
+        raise InputError(f"image is {w}x{h} px (width x height) but {size_from} is "
+                         f"{size_hw[1]}x{size_hw[0]} px; all frames and reference frames of one "
+                         "ingest must share one size (ingest other sizes separately)", path=path)
+
+
+def nominal_frame_rate_hz(folders: Sequence[ImageFolder]) -> float:
+    """The sensor's nominal rate in Hz: 1 / the median positive frame interval over all
+    trials (rounded to 1e-6 Hz, so evenly spaced 30 Hz times give 30.0), or
+    :data:`DEFAULT_FRAME_RATE_HZ` when no trial has two distinct frame times."""
+    intervals = np.concatenate([np.diff(f.t_s) for f in folders])
+    intervals = intervals[intervals > 0]
+    if not intervals.size:
+        return DEFAULT_FRAME_RATE_HZ
+    return round(float(1.0 / np.median(intervals)), 6)
+
+
+def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
+                          progress: Progress) -> None:
+    """Add one visuotactile sensor and one trial per input folder to ``writer``.
+
+    The sensor is named ``options.sensor_name`` (default ``visuotactile``); its size
+    comes from the frames and must match ``options.width_px``/``height_px`` when given.
+    Progress counts frames.
+    """
+    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz) for p in inputs]
+    first_ref = folders[0].reference
+    reference0 = load_rgb(first_ref)
+    size_hw = (int(reference0.shape[0]), int(reference0.shape[1]))
+    for option, value, actual in (("--width", options.width_px, size_hw[1]),
+                                  ("--height", options.height_px, size_hw[0])):
+        if value is not None and value != actual:
+            raise InputError(f"{option} is {value} px but the frames are "
+                             f"{size_hw[1]}x{size_hw[0]} px (width x height); drop {option} or "
+                             "fix it", path=first_ref)
+    sensor = writer.add_sensor(
+        options.sensor_name or "visuotactile", kind="visuotactile",
+        sample_rate_hz=nominal_frame_rate_hz(folders), width_px=size_hw[1], height_px=size_hw[0],
+        description="visuotactile camera frames ingested from image-sequence folders")
+    progress.start(sum(len(f.frames) for f in folders), "frames")
+    for folder in folders:
+        _write_trial(folder, writer, sensor, size_hw, first_ref, progress)
+    progress.finish()
+
+
+def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw: tuple[int, int],
+                 size_from: Path, progress: Progress) -> None:
+    reference = load_rgb(folder.reference)
+    _check_size(reference, folder.reference, size_hw, size_from)
+    extra: dict[str, float] = {}
+    if folder.frame_rate_assumed_hz is not None:
+        extra["frame_rate_assumed_hz"] = folder.frame_rate_assumed_hz
+    if folder.time_origin_unix_s is not None:
+        extra["time_origin_unix_s"] = folder.time_origin_unix_s
+    trial = writer.trial(folder.trial_name, **extra)
+    appender = trial.frames(sensor, reference=reference)
+    n_batch = max(1, min(len(folder.frames), FRAME_BATCH_BYTES // reference.nbytes))
+    batch = np.empty((n_batch, *reference.shape), dtype=np.uint8)
+    sources: list[int] = []
+    fill = 0
+    for k, path in enumerate(folder.frames):
+        sources.append(writer.add_source(path))
+        frame = load_rgb(path)
+        _check_size(frame, path, size_hw, size_from)
+        batch[fill] = frame
+        fill += 1
+        if fill == n_batch or k == len(folder.frames) - 1:
+            appender.append(batch[:fill], folder.t_s[k + 1 - fill:k + 1])
+            fill = 0
+        progress.advance(1)
+    appender.close()
+    sources.append(writer.add_source(folder.reference))
+    if folder.timestamps_file is not None:
+        sources.append(writer.add_source(folder.timestamps_file))
+    # set after streaming: the writer's trial() takes sources up front, which would mean
+    # hashing every frame before the first one is decoded
+    trial.group.attrs["source_index"] = np.asarray(sources, dtype=np.int64)
+
+
+__all__ = [
+    "DEFAULT_FRAME_RATE_HZ",
+    "FrameTimes",
+    "REFERENCE_STEMS",
+    "TIMESTAMPS_FILE",
+    "ImageFolder",
+    "ingest_image_sequence",
+    "load_rgb",
+    "natural_key",
+    "nominal_frame_rate_hz",
+    "read_timestamps",
+    "scan_image_folder",
+]

@@ -1,0 +1,601 @@
+"""Sampled-signal CSVs of any sensor, described by a YAML mapping, into the tactile store.
+
+The mapping (:mod:`tactile_cli.ingest.mapping`, documented in ``configs/mapping_example.yaml``)
+says which paths are trials, which columns are time, channels and labels, the rates, units
+and sensor kinds. The ingest runs in two passes:
+
+1. **Plan**: find every trial, resolve its files, read every header and check that each
+   named column exists and that all trials have the same channels. Nothing is parsed yet,
+   so a typo in the mapping fails in a second, naming the file and the mapping key.
+2. **Read and write**: per trial, parse each file once (pandas C engine with explicit
+   settings, after a vectorised check that every row has exactly the header's field count,
+   so a short row is an error with its line number, never NaN-filled), build the time bases,
+   and write one signal stream per mapping stream.
+
+Time bases are seconds from the trial's first sample: the earliest first time of the
+trial's column-timed streams (one clock); evenly spaced streams start at 0. Epoch time
+columns record the origin in the trial attribute ``time_origin_unix_s``. Each signal group
+records its per-trial nominal rate in the attribute ``sample_rate_hz``; the sensor's
+``sample_rate_hz`` is the median over trials. The validated mapping is stored as JSON in
+the root attribute ``mapping_json``.
+"""
+
+from __future__ import annotations
+
+import csv
+import fnmatch
+import io
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..progress import Progress
+from ..store.writer import StoreWriter, safe_name
+from . import IngestOptions
+from .mapping import STEM_FIELD, CsvDialect, CsvMapping, Stream, load_mapping, render
+
+#: Text values parsed as NaN (then refused as non-finite, with their line and column).
+NAN_TOKENS = ("nan", "NaN", "NAN", "-nan", "-NaN", "-NAN")
+#: Header names listed in a "column not found" message.
+MAX_NAMES_SHOWN = 12
+
+_DIGITS = re.compile(r"([0-9]+)")
+
+
+# -- CSV tables -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class CsvTable:
+    """Columns of one parsed CSV file.
+
+    columns: name -> (n_rows,) float64 (numeric columns, all finite) or object (text);
+    first_data_line: 1-based line number of data row 0 in the file.
+    """
+
+    path: Path
+    names: tuple[str, ...]
+    columns: dict[str, np.ndarray]
+    n_rows: int
+    first_data_line: int
+
+    def line(self, row: int) -> int:
+        """1-based file line of data row ``row``."""
+        return self.first_data_line + int(row)
+
+
+def read_csv_header(path: Path, dialect: CsvDialect) -> list[str]:
+    """The column names of a CSV file: its first line, or ``dialect.column_names``."""
+    if not dialect.header:
+        return list(dialect.column_names or [])
+    with open(path, "rb") as f:
+        first = f.readline()
+    return _header_names(first, path, dialect)
+
+
+def _header_names(first: bytes, path: Path, dialect: CsvDialect) -> list[str]:
+    try:
+        text = first.decode("utf-8-sig").rstrip("\r\n")
+    except UnicodeDecodeError:
+        raise InputError("the header line is not UTF-8 text", path=path, where="line 1") from None
+    if not text.strip():
+        raise InputError("the header line is empty (set `header: false` and `column_names` "
+                         "in the mapping if the file has no header)", path=path, where="line 1")
+    names = [n.strip() for n in text.split(dialect.delimiter)]
+    if dialect.trailing_delimiter and len(names) > 1 and names[-1] == "":
+        names.pop()
+    if "" in names:
+        raise InputError(f"header column {names.index('') + 1} has no name", path=path,
+                         where="line 1")
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError(f"header repeats column names: {', '.join(dup)}", path=path,
+                         where="line 1")
+    return names
+
+
+def _line_bounds(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end (exclusive, without ``\\r\\n``) offsets of every line of ``buf``."""
+    nl = np.flatnonzero(buf == 10)
+    ends = nl if len(buf) == 0 or buf[-1] == 10 else np.append(nl, len(buf))
+    starts = np.concatenate(([0], nl + 1))[: len(ends)]
+    cr = (ends > starts) & (buf[np.maximum(ends - 1, 0)] == 13)
+    return starts, ends - cr
+
+
+def read_csv_table(
+    path: Path,
+    dialect: CsvDialect,
+    *,
+    numeric: Sequence[str] = (),
+    text: Sequence[str] = (),
+) -> CsvTable:
+    """Parse the named columns of a delimited file, checking every row first.
+
+    numeric: columns parsed as float64, which must all be finite (``nan``/``-nan`` and
+    ``inf`` are errors naming line and column); text: columns kept as strings.
+    Every data row must hold exactly as many fields as the header (plus one empty field
+    with ``trailing_delimiter``); blank lines are allowed only at the end of the file.
+    Raises :class:`InputError` naming the file, line and column.
+    """
+    raw = path.read_bytes()
+    buf = np.frombuffer(raw, dtype=np.uint8)
+    starts, ends = _line_bounds(buf)
+    nonblank = np.flatnonzero(ends > starts)
+    if len(nonblank) == 0:
+        raise InputError("the file is empty", path=path)
+    n_lines = int(nonblank[-1]) + 1  # trailing blank lines are dropped
+    starts, ends = starts[:n_lines], ends[:n_lines]
+    if dialect.header:
+        names = _header_names(raw[starts[0]:ends[0]], path, dialect)
+        skip = 1
+    else:
+        names = list(dialect.column_names or [])
+        skip = 0
+    wanted = list(dict.fromkeys([*numeric, *text]))
+    missing = [c for c in wanted if c not in names]
+    if missing:
+        raise InputError(f"column {missing[0]!r} is not in the file (columns: "
+                         f"{_shown(names)})", path=path, where="line 1" if dialect.header else None)
+    d_starts, d_ends = starts[skip:], ends[skip:]
+    n_rows = len(d_starts)
+    if n_rows == 0:
+        raise InputError("the file has a header but no data rows", path=path)
+    blank = np.flatnonzero(d_ends == d_starts)
+    if len(blank):
+        raise InputError("blank line inside the data (only the end of a file may be blank)",
+                         path=path, where=f"line {skip + int(blank[0]) + 1}")
+    delim = ord(dialect.delimiter)
+    dpos = np.flatnonzero(buf[: ends[-1]] == delim)
+    fields = np.searchsorted(dpos, d_ends) - np.searchsorted(dpos, d_starts) + 1
+    expected = len(names) + int(dialect.trailing_delimiter)
+    bad = np.flatnonzero(fields != expected)
+    if len(bad):
+        i = int(bad[0])
+        got = int(fields[i]) - int(dialect.trailing_delimiter)
+        hint = ""
+        if got == len(names) + 1 and not dialect.trailing_delimiter:
+            hint = "; if every row ends with the delimiter, set `trailing_delimiter: true`"
+        elif got < len(names):
+            hint = " (a short or cut-off row)"
+        raise InputError(f"row has {got} fields, expected {len(names)} like the "
+                         f"{'header' if dialect.header else '`column_names`'}{hint}",
+                         path=path, where=f"line {skip + i + 1}")
+    if dialect.trailing_delimiter:
+        no_trail = np.flatnonzero(buf[d_ends - 1] != delim)
+        if len(no_trail):
+            raise InputError("row does not end with the delimiter (`trailing_delimiter: true`): "
+                             "a field is missing inside it", path=path,
+                             where=f"line {skip + int(no_trail[0]) + 1}")
+    index = {n: i for i, n in enumerate(names)}
+    numeric_set = set(numeric)
+    dtypes = {index[c]: (np.float64 if c in numeric_set else object) for c in wanted}
+    body = io.BytesIO(raw[d_starts[0]: ends[-1]])
+    read_kwargs = dict(sep=dialect.delimiter, header=None, usecols=sorted(dtypes), engine="c",
+                       keep_default_na=False, quoting=csv.QUOTE_NONE, on_bad_lines="error",
+                       encoding="utf-8-sig" if skip == 0 else "utf-8", skip_blank_lines=False)
+    try:
+        frame = pd.read_csv(body, dtype=dtypes, na_values=list(NAN_TOKENS), **read_kwargs)
+    except ValueError as exc:
+        body.seek(0)
+        _locate_bad_number(pd.read_csv(body, dtype=object, na_filter=False, **read_kwargs),
+                           [c for c in wanted if c in numeric_set], index, path, skip, exc)
+        raise  # _locate_bad_number always raises
+    if len(frame) != n_rows:  # the checks above make this impossible; keep the reader honest
+        raise InputError(f"parsed {len(frame)} rows but the file has {n_rows}", path=path)
+    columns: dict[str, np.ndarray] = {}
+    for c in wanted:
+        values = frame[index[c]].to_numpy()
+        if c in numeric_set:
+            values = values.astype(np.float64, copy=False)
+            notfinite = np.flatnonzero(~np.isfinite(values))
+            if len(notfinite):
+                i = int(notfinite[0])
+                raise InputError(f"column {c!r} holds {values[i]} (values must be finite; "
+                                 "leave the column out of the mapping if it is not measured)",
+                                 path=path, where=f"line {skip + i + 1}, column {c!r}")
+        else:
+            values = values.astype(object, copy=False)
+        columns[c] = values
+    return CsvTable(path=path, names=tuple(names), columns=columns, n_rows=n_rows,
+                    first_data_line=skip + 1)
+
+
+def _locate_bad_number(frame: pd.DataFrame, numeric: list[str], index: dict[str, int], path: Path,
+                       skip: int, exc: Exception) -> None:
+    """Raise an InputError at the first numeric-column cell that is not a number."""
+    first: tuple[int, str, str] | None = None
+    for c in numeric:
+        cells = frame[index[c]].to_numpy(dtype=object).astype(str)
+        parsed = pd.to_numeric(pd.Series(cells), errors="coerce").to_numpy(dtype=np.float64)
+        bad = np.flatnonzero(np.isnan(parsed) & ~np.isin(cells, NAN_TOKENS))
+        if len(bad) and (first is None or bad[0] < first[0]):
+            first = (int(bad[0]), c, str(cells[bad[0]]))
+    if first is None:
+        raise InputError(f"cannot parse the file ({exc})", path=path) from None
+    row, c, cell = first
+    what = ("an empty field (a missing value or a stray delimiter)" if cell.strip() == ""
+            else f"{cell!r}, which is not a number")
+    raise InputError(f"column {c!r} holds {what}",
+                     path=path, where=f"line {skip + row + 1}, column {c!r}") from None
+
+
+def _shown(names: Sequence[str]) -> str:
+    head = ", ".join(names[:MAX_NAMES_SHOWN])
+    return head + (f", ... ({len(names)} in all)" if len(names) > MAX_NAMES_SHOWN else "")
+
+
+def natural_key(path: Path) -> list[object]:
+    """Sort key that puts ``mat2`` before ``mat10``."""
+    return [int(p) if p.isdigit() else p for p in _DIGITS.split(path.as_posix())]
+
+
+# -- plan ------------------------------------------------------------------------------------
+@dataclass
+class TrialPlan:
+    """One trial found and checked before any data are parsed.
+
+    files: file template -> path; channels: stream name -> selected column names.
+    """
+
+    name: str
+    path: Path
+    labels: dict[str, str | int | float]
+    files: dict[str, Path]
+    channels: dict[str, list[str]] = field(default_factory=dict)
+
+
+def plan_trials(inputs: Sequence[Path], mapping: CsvMapping, mapping_path: Path) -> list[TrialPlan]:
+    """Find every trial, resolve its files and check every column the mapping names."""
+    layout = mapping.trials
+    rx = re.compile(layout.pattern) if layout.pattern else None
+    plans: list[TrialPlan] = []
+    seen: dict[Path, Path] = {}
+    for inp in inputs:
+        for found in _find_trial_paths(inp, mapping):
+            key = found.resolve()
+            if key in seen:
+                raise InputError(f"this trial is found twice (also from input {seen[key]}); "
+                                 "give inputs that do not overlap", path=found)
+            seen[key] = inp
+            fields = {STEM_FIELD: found.stem if layout.layout == "file" else found.name}
+            if rx is not None:
+                m = rx.search(found.as_posix())
+                if m is None:
+                    raise InputError(f"the trial path does not match `trials.pattern` "
+                                     f"{layout.pattern!r} in {mapping_path}", path=found)
+                fields.update({k: v or "" for k, v in m.groupdict().items()})
+            folder = found.parent if layout.layout == "file" else found
+            name = render(layout.name, fields) if layout.name else fields[STEM_FIELD]
+            labels: dict[str, str | int | float] = {**layout.labels}
+            labels.update({k: v for k, v in fields.items() if k != STEM_FIELD})
+            files = {}
+            for s in mapping.streams:
+                for template, key in s.templates():
+                    path = folder / render(template, fields)
+                    if not path.is_file():
+                        raise InputError(f"file of trial {name!r} not found (named by "
+                                         f"`streams.{s.name}.{key}` {template!r} in "
+                                         f"{mapping_path})", path=path)
+                    files[template] = path
+            plans.append(TrialPlan(name=name, path=found, labels=labels, files=files))
+    if not plans:
+        raise InputError("no trials found", path=inputs[0] if inputs else None)
+    _check_columns(plans, mapping, mapping_path)
+    return plans
+
+
+def _find_trial_paths(inp: Path, mapping: CsvMapping) -> list[Path]:
+    layout = mapping.trials
+    if layout.layout == "file":
+        if inp.is_file():
+            return [inp]
+        found = sorted((p for p in inp.glob(layout.glob) if p.is_file()), key=natural_key)
+        if not found:
+            raise InputError(f"no file matches `trials.glob` {layout.glob!r} here", path=inp)
+        return found
+    if not inp.is_dir():
+        raise InputError("the mapping's trials are folders (`layout: folder`); give folders",
+                         path=inp)
+    found = sorted((p for p in inp.glob(layout.glob) if p.is_dir()), key=natural_key)
+    if found:
+        return found
+    first = mapping.streams[0].file
+    if "{" not in first and (inp / first).is_file():
+        return [inp]  # the input is itself one trial folder
+    raise InputError(f"no folder matches `trials.glob` {layout.glob!r} here, and the folder "
+                     f"itself has no {first!r}", path=inp)
+
+
+def _check_columns(plans: list[TrialPlan], mapping: CsvMapping, mapping_path: Path) -> None:
+    headers: dict[Path, list[str]] = {}
+
+    def header(plan: TrialPlan, template: str) -> list[str]:
+        path = plan.files[template]
+        if path not in headers:
+            headers[path] = read_csv_header(path, mapping.dialect(template))
+        return headers[path]
+
+    def need(plan: TrialPlan, template: str, column: str, key: str) -> None:
+        names = header(plan, template)
+        if column not in names:
+            raise InputError(f"column {column!r} (named by `{key}` in {mapping_path}) is not in "
+                             f"the file (columns: {_shown(names)})", path=plan.files[template],
+                             where="line 1" if mapping.dialect(template).header else None)
+
+    first_channels: dict[str, tuple[list[str], Path]] = {}
+    for plan in plans:
+        for s in mapping.streams:
+            key = f"streams.{s.name}"
+            names = header(plan, s.file)
+            chosen: list[str] = []
+            for entry in s.channels:
+                if any(ch in entry for ch in "*?["):
+                    hits = [n for n in names if fnmatch.fnmatchcase(n, entry)]
+                    if not hits:
+                        raise InputError(f"pattern {entry!r} (in `{key}.channels` of "
+                                         f"{mapping_path}) matches no column (columns: "
+                                         f"{_shown(names)})", path=plan.files[s.file],
+                                         where="line 1" if mapping.dialect(s.file).header
+                                         else None)
+                else:
+                    need(plan, s.file, entry, f"{key}.channels")
+                    hits = [entry]
+                for h in hits:
+                    if h in chosen:
+                        raise InputError(f"column {h!r} is selected twice by `{key}.channels` "
+                                         f"in {mapping_path}", path=plan.files[s.file])
+                    chosen.append(h)
+            _check_stream_shape(s, chosen, mapping_path, plan.files[s.file])
+            if s.name in first_channels and first_channels[s.name][0] != chosen:
+                ref_cols, ref_path = first_channels[s.name]
+                raise InputError(f"stream {s.name!r} has columns {_shown(chosen)} here but "
+                                 f"{_shown(ref_cols)} in {ref_path}; all trials of a stream "
+                                 "need the same channels", path=plan.files[s.file])
+            first_channels.setdefault(s.name, (chosen, plan.files[s.file]))
+            plan.channels[s.name] = chosen
+            if s.time.column is not None:
+                need(plan, s.time.file or s.file, s.time.column, f"{key}.time.column")
+            if s.time.rate_from is not None:
+                need(plan, s.time.rate_from.file, s.time.rate_from.column,
+                     f"{key}.time.rate_from.column")
+            for lab in s.sample_labels:
+                need(plan, lab.file or s.file, lab.column, f"{key}.sample_labels.{lab.name}.column")
+
+
+def _check_stream_shape(s: Stream, chosen: list[str], mapping_path: Path, path: Path) -> None:
+    if s.channel_names is not None and len(s.channel_names) != len(chosen):
+        raise InputError(f"`streams.{s.name}.channel_names` has {len(s.channel_names)} names "
+                         f"but `channels` selects {len(chosen)} columns in {mapping_path}",
+                         path=path)
+    for name in output_channels(s, chosen):
+        unit_of(s, name, mapping_path)
+
+
+def output_channels(s: Stream, columns: list[str]) -> list[str]:
+    """The stream's output channel names for its selected columns."""
+    if s.unroll is not None:
+        return [s.unroll.channel]
+    return list(s.channel_names) if s.channel_names is not None else list(columns)
+
+
+def unit_of(s: Stream, channel: str, mapping_path: Path) -> str:
+    """The unit of one output channel (``units`` is one string or ``{glob: unit}``)."""
+    if isinstance(s.units, str):
+        return s.units
+    for pattern, unit in s.units.items():
+        if fnmatch.fnmatchcase(channel, pattern):
+            return unit
+    raise InputError(f"no pattern of `streams.{s.name}.units` ({', '.join(s.units)}) matches "
+                     f"channel {channel!r}; add one", path=mapping_path)
+
+
+# -- read and write --------------------------------------------------------------------------
+@dataclass
+class _StreamData:
+    data: np.ndarray  # (n, c) float64 in the channel units
+    t_raw_s: np.ndarray | None  # (n,) seconds on the trial clock, before the origin shift
+    t_s: np.ndarray | None  # (n,) seconds from 0 for evenly spaced streams
+    rate_hz: float  # nominal rate of the output samples
+    labels: dict[str, tuple[np.ndarray, list[str] | None]]
+
+
+def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
+                      progress: Progress) -> None:
+    """Ingest CSV recordings described by the mapping file ``options.mapping``.
+
+    Trials become groups named by ``trials.name`` (default file stem or folder name), with
+    the trial labels of the mapping; each stream becomes ``signals/<stream>`` with its
+    sensor in ``/sensors``. Every file read is recorded as a source.
+    """
+    if options.mapping is None:
+        raise InputError("the mapped-csv format needs a mapping file: pass --mapping FILE.yaml "
+                         "(see configs/mapping_example.yaml)")
+    mapping_path = Path(options.mapping)
+    mapping = load_mapping(mapping_path)
+    plans = plan_trials(inputs, mapping, mapping_path)
+    writer.h5.attrs["mapping_json"] = mapping.model_dump_json()
+    rates: dict[str, list[float]] = {s.name: [] for s in mapping.streams}
+    progress.start(sum(len(set(p.files.values())) for p in plans), "reading CSV files")
+    for plan in plans:
+        tables = _read_tables(plan, mapping, progress)
+        sources = [writer.add_source(p) for p in dict.fromkeys(plan.files.values())]
+        streams = {s.name: _stream_data(s, plan, tables, mapping_path) for s in mapping.streams}
+        timed = [d.t_raw_s[0] for d in streams.values() if d.t_raw_s is not None]
+        origin = float(min(timed)) if timed else 0.0
+        extra = {}
+        if timed and any(s.time.epoch for s in mapping.streams):
+            extra["time_origin_unix_s"] = origin
+        trial = writer.trial(plan.name, labels=plan.labels, sources=sources, **extra)
+        for s in mapping.streams:
+            d = streams[s.name]
+            t_s = d.t_raw_s - origin if d.t_raw_s is not None else d.t_s
+            trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data, t_s=t_s,
+                               sample_labels=d.labels)
+            trial.group["signals"][safe_name(s.name)].attrs["sample_rate_hz"] = d.rate_hz
+            rates[s.name].append(d.rate_hz)
+    for s in mapping.streams:
+        names = output_channels(s, plans[0].channels[s.name])
+        writer.add_sensor(s.sensor_name, kind=s.kind,
+                          sample_rate_hz=float(np.median(rates[s.name])), channel_names=names,
+                          channel_units=[unit_of(s, n, mapping_path) for n in names],
+                          description=s.description)
+    progress.finish()
+
+
+def _read_tables(plan: TrialPlan, mapping: CsvMapping, progress: Progress) -> dict[str, CsvTable]:
+    """Parse every file of a trial once, with all the columns any stream needs from it."""
+    numeric: dict[str, list[str]] = {t: [] for t in plan.files}
+    text: dict[str, list[str]] = {t: [] for t in plan.files}
+    for s in mapping.streams:
+        numeric[s.file] += plan.channels[s.name]
+        if s.time.column is not None:
+            numeric[s.time.file or s.file].append(s.time.column)
+        if s.time.rate_from is not None:
+            numeric[s.time.rate_from.file].append(s.time.rate_from.column)
+        for lab in s.sample_labels:
+            (text if lab.classes is not None else numeric)[lab.file or s.file].append(lab.column)
+    tables: dict[str, CsvTable] = {}
+    by_path: dict[Path, CsvTable] = {}
+    for template, path in plan.files.items():
+        if path not in by_path:
+            num = list(dict.fromkeys(numeric[template]))
+            txt = [c for c in dict.fromkeys(text[template]) if c not in num]
+            by_path[path] = read_csv_table(path, mapping.dialect(template), numeric=num, text=txt)
+            progress.advance(1)
+        tables[template] = by_path[path]
+    return tables
+
+
+def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
+                 mapping_path: Path) -> _StreamData:
+    table = tables[s.file]
+    n = table.n_rows
+    joined = [table]
+    if s.time.column is not None and s.time.file is not None:
+        joined.append(tables[s.time.file])
+    joined += [tables[lab.file] for lab in s.sample_labels if lab.file is not None]
+    if len({t.n_rows for t in joined}) > 1:
+        unique = {t.path: t for t in joined}.values()
+        counts = ", ".join(f"{t.path.name} {t.n_rows} rows" for t in unique)
+        raise InputError(f"the files of trial {plan.name!r} joined row by row for stream "
+                         f"{s.name!r} differ in row count ({counts}); they must have one row "
+                         "per sample", path=plan.path)
+    data = np.column_stack([table.columns[c] for c in plan.channels[s.name]])
+    rate_hz = s.time.sample_rate_hz
+    if s.time.rate_from is not None:
+        rate_hz = _value_from(tables[s.time.rate_from.file], s.time.rate_from.column)
+    t_raw = t_even = None
+    if s.time.column is not None:
+        ttab = tables[s.time.file or s.file]
+        t_raw = ttab.columns[s.time.column] * s.time.seconds_per_unit
+        back = np.flatnonzero(np.diff(t_raw) < 0)
+        if len(back):
+            i = int(back[0])
+            raise InputError(f"time goes back from {ttab.columns[s.time.column][i]!r} (line "
+                             f"{ttab.line(i)}) to {ttab.columns[s.time.column][i + 1]!r}; "
+                             "timestamps must not decrease", path=ttab.path,
+                             where=f"line {ttab.line(i + 1)}, column {s.time.column!r}")
+        if rate_hz is None:
+            steps = np.diff(t_raw)
+            step = float(np.median(steps)) if len(steps) else 0.0
+            rate_hz = 1.0 / step if step > 0 else 0.0
+    else:
+        if rate_hz is None:  # the mapping model requires a time column or a rate
+            raise RuntimeError(f"stream {s.name!r} has neither a time column nor a rate")
+        t_even = np.arange(n, dtype=np.float64) / rate_hz
+    labels = {lab.name: _label_values(lab.classes, tables[lab.file or s.file], lab.column)
+              for lab in s.sample_labels}
+    if s.unroll is not None:
+        m = data.shape[1]
+        base = t_raw if t_raw is not None else t_even
+        data, t_new = _unroll(data, base, rate_hz, s, table)
+        if t_raw is not None:
+            t_raw = t_new
+        else:
+            t_even = t_new
+        labels = {k: (np.repeat(v, m), c) for k, (v, c) in labels.items()}
+        rate_hz = rate_hz * m
+    return _StreamData(data=data, t_raw_s=t_raw, t_s=t_even, rate_hz=float(rate_hz), labels=labels)
+
+
+def _unroll(data: np.ndarray, t_row: np.ndarray, row_rate_hz: float, s: Stream,
+            table: CsvTable) -> tuple[np.ndarray, np.ndarray]:
+    """(n, m) rows of m consecutive samples -> (n*m, 1) samples and (n*m,) times.
+
+    Sample k of row i is at t_i + k/m * (t_{i+1} - t_i); the last row repeats the
+    previous interval (or 1/row rate for a one-row file).
+    """
+    n, m = data.shape
+    if n >= 2:
+        last_step = t_row[-1] - t_row[-2]
+    elif row_rate_hz > 0:
+        last_step = 1.0 / row_rate_hz
+    else:
+        raise InputError(f"stream {s.name!r}: cannot unroll a single row without a rate; give "
+                         "`time.sample_rate_hz`", path=table.path)
+    t_ext = np.append(t_row, t_row[-1] + last_step)
+    t = np.interp(np.arange(n * m, dtype=np.float64) / m, np.arange(n + 1, dtype=np.float64), t_ext)
+    return data.reshape(n * m, 1), t
+
+
+def _value_from(table: CsvTable, column: str) -> float:
+    if table.n_rows != 1:
+        raise InputError(f"a rate is read from column {column!r}, so the file must have exactly "
+                         f"one data row; it has {table.n_rows}", path=table.path)
+    value = float(table.columns[column][0])
+    if not value > 0:
+        raise InputError(f"rate {value} Hz in column {column!r} is not positive", path=table.path,
+                         where=f"line {table.line(0)}, column {column!r}")
+    return value
+
+
+def _label_values(classes: list[str] | None, table: CsvTable,
+                  column: str) -> tuple[np.ndarray, list[str] | None]:
+    """(n,) label values: float64 for numeric labels, integer codes for categorical ones."""
+    values = table.columns[column]
+    if classes is None:
+        return values, None
+    k = len(classes)
+    dtype = np.int8 if k <= 127 else np.int32
+    if values.dtype.kind == "f":
+        codes = values
+        bad = np.flatnonzero((codes != np.round(codes)) | (codes < 0) | (codes >= k))
+        if len(bad):
+            i = int(bad[0])
+            raise InputError(f"label {codes[i]!r} is not a class code 0..{k - 1} of classes "
+                             f"{', '.join(classes)}", path=table.path,
+                             where=f"line {table.line(i)}, column {column!r}")
+        return codes.astype(dtype), classes
+    text = values.astype(str)
+    uniq, inverse = np.unique(text, return_inverse=True)
+    lookup = np.empty(len(uniq), dtype=dtype)
+    for j, u in enumerate(uniq.tolist()):  # over distinct values, not samples
+        code = _class_code(u, classes)
+        if code is None:
+            i = int(np.flatnonzero(inverse == j)[0])
+            raise InputError(f"label {u!r} is not one of the classes {', '.join(classes)} (nor "
+                             f"a code 0..{k - 1})", path=table.path,
+                             where=f"line {table.line(i)}, column {column!r}")
+        lookup[j] = code
+    return lookup[inverse], classes
+
+
+def _class_code(value: str, classes: list[str]) -> int | None:
+    value = value.strip()
+    if value in classes:
+        return classes.index(value)
+    try:
+        number = float(value)
+    except ValueError:
+        return None
+    if number.is_integer() and 0 <= number < len(classes):
+        return int(number)
+    return None
+
+
+__all__ = ["CsvTable", "TrialPlan", "ingest_mapped_csv", "plan_trials", "read_csv_header",
+           "read_csv_table"]
