@@ -14,8 +14,10 @@ def shared_path(*parts: str) -> Path:
     """A path under ../shared/data, skipping the test with a reason when it is absent."""
     path = SHARED_DATA.joinpath(*parts)
     if not path.exists():
-        pytest.skip(f"real recordings not present at {path} (they sit beside the project in CI; "
-                    "see ../shared/data/README.md)")
+        pytest.skip(
+            f"real recordings not present at {path} (they sit beside the project in CI; "
+            "see ../shared/data/README.md)"
+        )
     return path
 
 

@@ -12,9 +12,9 @@ import typer
 
 from .._version import __version__
 from . import info as _info
+from . import ingest as _ingest
 from . import plot as _plot
 from . import samples as _samples
-from . import ingest as _ingest
 from . import validate as _validate
 
 app = typer.Typer(
@@ -35,20 +35,34 @@ def _version_callback(value: bool) -> None:
 
 @app.callback()
 def _root(
-    version: Annotated[bool, typer.Option("--version", callback=_version_callback, is_eager=True,
-                                          help="Print the version and exit.")] = False,
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            callback=_version_callback,
+            is_eager=True,
+            help="Print the version and exit.",
+        ),
+    ] = False,
 ) -> None:
     """Tactile-sensing research from raw recordings to trained, evaluated models."""
 
 
-app.command("ingest", help="Raw recordings (AEDAT4/CSV/NPY events, sensor CSVs, images) into one HDF5 file.")(
-    _ingest.ingest_command)
-app.command("info", help="Sensors, trials, labels and durations of a tactile HDF5 file.")(_info.info_command)
-app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 files.")(_plot.plot_command)
+app.command(
+    "ingest", help="Raw recordings (AEDAT4/CSV/NPY events, sensor CSVs, images) into one HDF5 file."
+)(_ingest.ingest_command)
+app.command("info", help="Sensors, trials, labels and durations of a tactile HDF5 file.")(
+    _info.info_command
+)
+app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 files.")(
+    _plot.plot_command
+)
 app.command("samples", help="Write small synthetic recordings of every input format.")(
-    _samples.samples_command)
+    _samples.samples_command
+)
 app.command("validate", help="Check HDF5 files against the tactile schema; list every violation.")(
-    _validate.validate_command)
+    _validate.validate_command
+)
 
 
 def main() -> None:

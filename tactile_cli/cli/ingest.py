@@ -14,25 +14,51 @@ from .progress import RichProgress
 
 
 def ingest_command(
-    inputs: Annotated[list[Path], typer.Argument(help="Raw recordings: files or folders.", show_default=False)],
+    inputs: Annotated[
+        list[Path], typer.Argument(help="Raw recordings: files or folders.", show_default=False)
+    ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", show_default=False)],
-    fmt: Annotated[str, typer.Option("--format", "-f",
-                                     help=f"Input format: auto, {', '.join(FORMATS)}.")] = "auto",
-    mapping: Annotated[Path | None, typer.Option(
-        help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml).")] = None,
-    label: Annotated[list[str] | None, typer.Option(
-        "--label", "-l", help="key=value label added to every trial; repeatable.")] = None,
-    width: Annotated[int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")] = None,
-    height: Annotated[int | None, typer.Option(help="Event sensor height in px (CSV/NPY events).")] = None,
-    sensor: Annotated[str | None, typer.Option(help="Sensor name to record (default from the input).")] = None,
-    fps: Annotated[float | None, typer.Option(
-        min=0.001, help="Frame rate of image folders without a timestamps.csv (default 30).")] = None,
+    fmt: Annotated[
+        str, typer.Option("--format", "-f", help=f"Input format: auto, {', '.join(FORMATS)}.")
+    ] = "auto",
+    mapping: Annotated[
+        Path | None,
+        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml)."),
+    ] = None,
+    label: Annotated[
+        list[str] | None,
+        typer.Option("--label", "-l", help="key=value label added to every trial; repeatable."),
+    ] = None,
+    width: Annotated[
+        int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")
+    ] = None,
+    height: Annotated[
+        int | None, typer.Option(help="Event sensor height in px (CSV/NPY events).")
+    ] = None,
+    sensor: Annotated[
+        str | None, typer.Option(help="Sensor name to record (default from the input).")
+    ] = None,
+    fps: Annotated[
+        float | None,
+        typer.Option(
+            min=0.001, help="Frame rate of image folders without a timestamps.csv (default 30)."
+        ),
+    ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
-    compression: Annotated[int, typer.Option(
-        min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed.")] = 4,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a terminal).",
-        show_default=False)] = None,
+    compression: Annotated[
+        int,
+        typer.Option(
+            min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed."
+        ),
+    ] = 1,
+    progress: Annotated[
+        bool | None,
+        typer.Option(
+            "--progress/--no-progress",
+            help="Show a progress bar (default: when stderr is a terminal).",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
 
@@ -43,13 +69,24 @@ def ingest_command(
     """
 
     def body() -> None:
-        options = IngestOptions(format=fmt, mapping=mapping, labels=parse_labels(label or []),
-                                width_px=width, height_px=height, sensor_name=sensor,
-                                frame_rate_hz=fps)
+        options = IngestOptions(
+            format=fmt,
+            mapping=mapping,
+            labels=parse_labels(label or []),
+            width_px=width,
+            height_px=height,
+            sensor_name=sensor,
+            frame_rate_hz=fps,
+        )
         with RichProgress(enabled=progress) as bar:
-            path = ingest(inputs, out, options=options, overwrite=overwrite,
-                          compression=Compression(None if compression < 0 else compression),
-                          progress=bar)
+            path = ingest(
+                inputs,
+                out,
+                options=options,
+                overwrite=overwrite,
+                compression=Compression(None if compression < 0 else compression),
+                progress=bar,
+            )
         typer.echo(f"wrote {path}")
 
     run_guarded(body)

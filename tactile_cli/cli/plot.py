@@ -13,8 +13,10 @@ from ._errors import run_guarded
 
 def plot_command(
     files: Annotated[list[Path], typer.Argument(help="Tactile HDF5 files.", show_default=False)],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for the PNGs and index.html.",
-                                      show_default=False)],
+    out: Annotated[
+        Path,
+        typer.Option("--out", "-o", help="Folder for the PNGs and index.html.", show_default=False),
+    ],
     max_trials: Annotated[int, typer.Option(min=1, help="Trials drawn per file.")] = 4,
 ) -> None:
     """Quick-look figures of each file (events per 20 ms, signals with labels, frames) and

@@ -5,8 +5,14 @@ from __future__ import annotations
 import sys
 
 from rich.console import Console
-from rich.progress import (BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn,
-                           TimeRemainingColumn)
+from rich.progress import (
+    BarColumn,
+    Progress,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 
 class RichProgress:
@@ -14,10 +20,16 @@ class RichProgress:
 
     def __init__(self, *, enabled: bool | None = None):
         enabled = sys.stderr.isatty() if enabled is None else enabled
-        self._bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                             TextColumn("{task.percentage:>3.0f}%"), TimeElapsedColumn(),
-                             TimeRemainingColumn(), console=Console(stderr=True), disable=not enabled,
-                             transient=False)
+        self._bar = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            disable=not enabled,
+            transient=False,
+        )
         self._task: TaskID | None = None
 
     def __enter__(self) -> RichProgress:

@@ -5,6 +5,7 @@ bin in, per-trial dataclasses out. The fits run in float64 inside a scoped
 ``jax.enable_x64(True)`` context; importing this package changes no global JAX setting.
 """
 
+from .fit import FitOptions as FitOptions
 from .fit import FitStatus as FitStatus
 from .fit import FosFitResult as FosFitResult
 from .fit import fit_pulse as fit_pulse
@@ -14,6 +15,7 @@ from .fit import fit_step as fit_step
 from .models import first_order_response as first_order_response
 from .models import pulse_response as pulse_response
 from .models import ramp_response as ramp_response
+from .models import second_order_basis as second_order_basis
 from .models import second_order_response as second_order_response
 from .models import step_response as step_response
 from .models import unit_response as unit_response

@@ -14,12 +14,16 @@ Units everywhere: ``t_s``, ``tau_s`` and ``duration_s`` (T) in seconds from the 
 ``alpha`` in events per bin (the paper counts events in 20 ms bins), so a response is in
 events per bin too.
 
-The second-order alternative is the sum of two first-order modes with free gains,
-``alpha[0] * unit(t; tau[0]) + alpha[1] * unit(t; tau[1])``: a transfer function with two
-real poles and one zero. It contains the classic overdamped second-order system
-``K / ((tau0 s + 1)(tau1 s + 1))`` (gains of opposite sign, an S-shaped rise) and a fast
-rise followed by a slow creep or sag (the "big force" responses of paper fig. 11), and it
-nests the first-order model (one gain zero), which is what an information criterion needs.
+The second-order alternative is the general linear second-order system
+``alpha (1 + lead s) / (tau^2 s^2 + 2 zeta tau s + 1)``: ``tau = 1/omega_n`` in s, damping
+ratio ``zeta``, and a zero with time constant ``lead_s``. With ``lead = 0`` it is the
+textbook second-order system (an overshoot for ``zeta < 1``, an S-shaped rise with a sharp
+knee for ``zeta >= 1``); with two real poles and a zero it is any sum of two first-order
+modes (a fast rise with a slow creep or sag, or a saturating rise). It contains the FOS
+exactly (the zero cancelling one pole), which is what an information criterion between the
+two needs. It is linear in ``alpha`` and ``alpha * lead``. Its parameters are written with
+(tau, zeta) rather than two time constants so that critical damping, where two real time
+constants merge and a fit would stall on the ridge, is an ordinary point.
 
 Every function works on numpy arrays (returns numpy) and on jax arrays or tracers (returns
 jax); parameters broadcast against ``t_s``. The models are linear in ``alpha``, which the
@@ -67,7 +71,7 @@ def unit_response(kind: Kind, t_s: Any, tau_s: Any, duration_s: Any = None) -> A
 
 
 def step_response(t_s: Any, alpha: Any, tau_s: Any) -> Any:
-    """Step response ``alpha (1 - exp(-t/tau))`` in events per bin (the T -> inf limit of eq. 16)."""
+    """Step response ``alpha (1 - exp(-t/tau))``, events per bin (eq. 16 for T -> inf)."""
     return alpha * unit_response("step", t_s, tau_s)
 
 
@@ -88,14 +92,70 @@ def first_order_response(
     return alpha * unit_response(kind, t_s, tau_s, duration_s)
 
 
-def second_order_response(
-    kind: Kind, t_s: Any, alpha: Any, tau_s: Any, duration_s: Any = None
-) -> Any:
-    """Two first-order modes with free gains, in events per bin.
+def _damped_pair(xp: Any, t_s: Any, tau_s: Any, zeta: Any) -> tuple[Any, Any, Any]:
+    """``exp(-a t) cosh(q t)``, ``exp(-a t) sinh(q t)/q`` and ``a`` for the pole pair
+    ``-a +- q`` of ``1/(tau^2 s^2 + 2 zeta tau s + 1)``, stable for every damping.
 
-    ``alpha`` and ``tau_s`` have a last axis of length 2 (the two modes); ``t_s`` and
-    ``duration_s`` broadcast against the leading axes. Returns
-    ``alpha[..., 0] unit(t; tau[..., 0]) + alpha[..., 1] unit(t; tau[..., 1])``.
+    Overdamped (q real) in terms of the slow rate ``a - q`` (no exp overflow however large a
+    gets near the first-order limit); underdamped (q imaginary) with cos and sinc; both are
+    analytic in q^2, so values and derivatives join at critical damping.
     """
-    return (first_order_response(kind, t_s, alpha[..., 0], tau_s[..., 0], duration_s)
-            + first_order_response(kind, t_s, alpha[..., 1], tau_s[..., 1], duration_s))
+    a = zeta / tau_s
+    q2 = a * a - 1.0 / (tau_s * tau_s)
+    q = xp.sqrt(xp.maximum(q2, 1e-300))  # evaluated on both sides of a `where`: keep finite
+    w = xp.sqrt(xp.maximum(-q2, 1e-300))
+    slow = 1.0 / (tau_s * tau_s * (a + q))  # a - q without cancellation
+    x = 2.0 * q * t_s
+    x_safe = xp.where(x > 1e-8, x, 1.0)
+    phi = xp.where(x > 1e-8, -xp.expm1(-x_safe) / x_safe, 1.0 - 0.5 * x)  # (1 - e^-x)/x
+    e_slow = xp.exp(-slow * t_s)
+    e_a = xp.exp(-a * t_s)
+    over = q2 > 0
+    cosh_part = xp.where(over, 0.5 * e_slow * (1.0 + xp.exp(-x)), e_a * xp.cos(w * t_s))
+    sinh_part = xp.where(over, e_slow * t_s * phi, e_a * t_s * xp.sinc(w * t_s / np.pi))
+    return cosh_part, sinh_part, a
+
+
+def second_order_basis(
+    kind: Kind, t_s: Any, tau_s: Any, zeta: Any, duration_s: Any = None
+) -> tuple[Any, Any]:
+    """Response ``b`` of ``1/(tau^2 s^2 + 2 zeta tau s + 1)`` to the input of ``kind``, and
+    its time derivative ``db/dt`` (the response to the same input through ``s/(...)``).
+
+    ``tau_s`` is 1/omega_n in s, ``zeta`` the damping ratio (< 1 overshoots, > 1 two real
+    poles). The ramp response is divided by ``2 zeta tau`` (the sum of the time constants)
+    so that, like eq. 17, its gain is in events per bin. For ``zeta -> inf`` at fixed
+    ``2 zeta tau``, ``b`` tends to the first-order response with that time constant.
+    """
+    xp = _xp(t_s, tau_s, zeta, duration_s)
+    if kind not in KINDS:
+        raise ValueError(f"`kind` (={kind!r}) must be one of {KINDS}.")
+
+    def step_and_impulse(t: Any) -> tuple[Any, Any]:
+        cosh_part, sinh_part, a = _damped_pair(xp, t, tau_s, zeta)
+        return 1.0 - cosh_part - a * sinh_part, sinh_part / (tau_s * tau_s)
+
+    if kind == "step":
+        return step_and_impulse(t_s)
+    if kind == "pulse":
+        if duration_s is None:
+            raise ValueError("`duration_s` (=None) is required for kind='pulse'.")
+        on, on_rate = step_and_impulse(t_s)
+        off, off_rate = step_and_impulse(xp.maximum(t_s - duration_s, 0.0))
+        return on - off, on_rate - off_rate
+    # ramp: the integral of the step response, t - 2 zeta tau + tau^2 e^-at (2a cosh + ...)
+    cosh_part, sinh_part, a = _damped_pair(xp, t_s, tau_s, zeta)
+    lag = 2.0 * zeta * tau_s
+    tail = tau_s * tau_s * (2.0 * a * cosh_part + (2.0 * a * a - 1.0 / (tau_s * tau_s))
+                            * sinh_part)
+    return (t_s - lag + tail) / lag, (1.0 - cosh_part - a * sinh_part) / lag
+
+
+def second_order_response(
+    kind: Kind, t_s: Any, alpha: Any, tau_s: Any, zeta: Any, duration_s: Any = None,
+    lead_s: Any = 0.0,
+) -> Any:
+    """Second-order response ``alpha (1 + lead s) / (tau^2 s^2 + 2 zeta tau s + 1)``, events
+    per bin: ``alpha (b + lead db/dt)`` with ``b`` from :func:`second_order_basis`."""
+    b, rate = second_order_basis(kind, t_s, tau_s, zeta, duration_s)
+    return alpha * (b + lead_s * rate)

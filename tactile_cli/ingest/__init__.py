@@ -16,7 +16,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.writer import Compression, StoreWriter, safe_name
+from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter, safe_name
 
 #: format name -> "module:function" (imported on use, so the CLI starts fast)
 FORMATS: dict[str, str] = {
@@ -61,12 +61,17 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
     kinds = set()
     for path in inputs:
         if path.is_dir():
-            if any(p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".")
-                   for p in path.iterdir()):
+            if any(
+                p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".")
+                for p in path.iterdir()
+            ):
                 kinds.add("images")
             else:
-                raise InputError("cannot tell the format of a folder; pass --format accel-tree, "
-                                 "--format images, or --mapping FILE.yaml", path=path)
+                raise InputError(
+                    "cannot tell the format of a folder; pass --format accel-tree, "
+                    "--format images, or --mapping FILE.yaml",
+                    path=path,
+                )
         elif path.suffix.lower() == ".aedat4":
             kinds.add("aedat4")
         elif path.suffix.lower() == ".npy":
@@ -74,10 +79,15 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
         elif path.suffix.lower() == ".csv":
             kinds.add("events-csv")
         else:
-            raise InputError(f"unknown format (suffix {path.suffix or 'none'!r}); supported: .aedat4, "
-                             ".npy, .csv events, folders with --format or --mapping", path=path)
+            raise InputError(
+                f"unknown format (suffix {path.suffix or 'none'!r}); supported: .aedat4, "
+                ".npy, .csv events, folders with --format or --mapping",
+                path=path,
+            )
     if len(kinds) != 1:
-        raise InputError(f"inputs mix formats ({', '.join(sorted(kinds))}); ingest each format separately")
+        raise InputError(
+            f"inputs mix formats ({', '.join(sorted(kinds))}); ingest each format separately"
+        )
     return kinds.pop()
 
 
@@ -87,7 +97,7 @@ def ingest(
     *,
     options: IngestOptions | None = None,
     overwrite: bool = False,
-    compression: Compression = Compression(),
+    compression: Compression = DEFAULT_COMPRESSION,
     progress: Progress | None = None,
     command: str | None = None,
 ) -> Path:
@@ -105,10 +115,15 @@ def ingest(
         if not path.exists():
             raise InputError("file not found", path=path)
     fmt = detect_format(paths, options)
-    config = {"format": fmt, **options.as_config(), "compression_level": compression.level,
-              "inputs": [str(p) for p in paths]}
-    with StoreWriter(out, command=command, config=config, overwrite=overwrite,
-                     compression=compression) as writer:
+    config = {
+        "format": fmt,
+        **options.as_config(),
+        "compression_level": compression.level,
+        "inputs": [str(p) for p in paths],
+    }
+    with StoreWriter(
+        out, command=command, config=config, overwrite=overwrite, compression=compression
+    ) as writer:
         module_name, func_name = FORMATS[fmt].split(":")
         reader = getattr(importlib.import_module(module_name), func_name)
         reader(paths, writer, options, progress)

@@ -13,7 +13,8 @@ and the line, where line 1 is the header):
   (dropping data without a word is worse than asking the user to remove a column).
 - Every data line holds one integer per column (``t`` in microseconds, ``x``/``y`` in
   pixels): a short line, an extra field (a trailing comma included), an empty line or a
-  non-integer value is an error. Blank lines at the very end of the file are ignored.
+  non-integer value is an error (surrounding spaces, quotes and a trailing ``.0`` are
+  accepted, as pandas reads them). Blank lines at the very end of the file are ignored.
 - Polarity is either 0/1 or -1/+1; the convention is detected once per file from the
   first 0 or -1, and any later value outside it (``2``, or a ``-1`` in a 0/1 file) is an
   error. Stored polarity is always -1/+1 (0 becomes -1).
@@ -24,40 +25,52 @@ bool); missing or extra fields are errors. A plain 2-D (n, 4) array is refused, 
 its column order would be a guess. Error locations are 0-based array indices
 (``index 17``), as numpy counts.
 
-CSV parsing uses pandas' C engine with explicit int64 dtypes on blocks of whole lines;
-when a block fails, a line-by-line pass over that block finds the first bad line, so the
-fast path never needs to track lines itself.
+CSV parsing uses pandas' C engine with explicit int64 dtypes on 4 MiB blocks of whole
+lines, a few blocks ahead in a thread pool (its tokenizer and integer conversion release
+the GIL), while the appender checks and compresses earlier blocks and the source's
+SHA-256 is computed alongside. When a block fails, a line-by-line pass over that block
+alone finds the first bad line, so the fast path never tracks lines itself.
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import os
 import re
-import warnings
-from collections.abc import Iterator
+import threading
+from collections import deque
+from collections.abc import Generator, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NoReturn
 
 import numpy as np
-import pandas as pd
 
 from ..errors import InputError
 from ..progress import Progress
-from ..store.writer import StoreWriter, safe_name
+from ..store.writer import StoreWriter, TrialWriter, safe_name
 from . import IngestOptions
 
 COLUMNS = ("t", "x", "y", "p")
 DEFAULT_SENSOR = "event_camera"
 
 #: CSV bytes parsed per block for each event of ``IngestOptions.chunk_events`` (a
-#: ``t,x,y,p`` line with absolute microsecond times is about 26 bytes).
+#: ``t,x,y,p`` line with absolute microsecond times is about 26 bytes) ...
 _CSV_BYTES_PER_EVENT = 26
+#: ... up to this many: larger blocks are slower, not faster (fresh multi-MiB buffers
+#: cost page faults: reading 540 MB took 0.9 s in 32 MiB blocks, 0.09 s in 4 MiB ones).
+_CSV_BLOCK_BYTES = 1 << 22
 #: Longest header line or data line accepted; a longer one means this is not an event CSV.
 _MAX_LINE_BYTES = 1 << 16
 _INT = re.compile(r"\s*[+-]?\d+(\.0*)?\s*")  # what pandas' C engine accepts as an int64
 _INT64 = np.iinfo(np.int64)
+#: Blocks parsed ahead of the one being appended (each holds its text and its columns).
+_BLOCKS_AHEAD = 3
+_POOL: ThreadPoolExecutor | None = None
+_POOL_PID = 0
+_POOL_LOCK = threading.Lock()
 
 
 # -- shared by the event readers ------------------------------------------------------------
@@ -77,6 +90,15 @@ def event_sensor(writer: StoreWriter, name: str, *, width_px: int, height_px: in
                          f"{have[0]}x{have[1]} px in an earlier input; ingest them separately "
                          "or name the sensors apart", path=source)
     return key
+
+
+def link_source(trial: TrialWriter, hashing: Future[int]) -> None:
+    """Point a trial at its source file once ``writer.add_source`` has run in the pool.
+
+    The SHA-256 of a large input takes a second per ~1.3 GB; started in the pool when the
+    file is opened, it runs while the file is parsed and compressed instead of before.
+    """
+    trial.group.attrs["source_index"] = np.asarray([hashing.result()], dtype=np.int64)
 
 
 def sensor_size(options: IngestOptions, what: str) -> tuple[int, int]:
@@ -106,6 +128,8 @@ class PolarityConvention:
         """(n,) polarity of the file's convention as (n,) int8 -1/+1; raises InputError
         naming the first value outside it."""
         p = np.asarray(p)
+        if p.size == 0:
+            return p.astype(np.int8)
         if self.name is None:
             first = np.flatnonzero((p == 0) | (p == -1))
             if first.size:
@@ -113,11 +137,13 @@ class PolarityConvention:
                 self.name = "0/1" if p[i] == 0 else "-1/+1"
                 self.where = f"{row_label} {first_row + i}"
         low = 0 if self.name == "0/1" else -1
+        # reductions first (no temporaries); the mask only to name the bad row
         if self.name is None:  # only 1s (or invalid values) so far
-            bad = p != 1
+            ok = p.min() == 1 and p.max() == 1
         else:
-            bad = (p != low) & (p != 1)
-        if bad.any():
+            ok = p.min() >= low and p.max() <= 1 and (low == 0 or np.count_nonzero(p) == p.size)
+        if not ok:
+            bad = p != 1 if self.name is None else (p != low) & (p != 1)
             i = int(np.flatnonzero(bad)[0])
             value = p[i]
             if self.name is None:
@@ -141,10 +167,12 @@ def ingest_events_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
     sensor = event_sensor(writer, options.sensor_name or DEFAULT_SENSOR, width_px=width,
                           height_px=height, description="events from CSV (t us, x px, y px, p)")
     progress.start(sum(_regular_file(p).stat().st_size for p in inputs), "events CSV")
-    block_bytes = max(_MAX_LINE_BYTES, options.chunk_events * _CSV_BYTES_PER_EVENT)
+    block_bytes = max(_MAX_LINE_BYTES,
+                      min(_CSV_BLOCK_BYTES, options.chunk_events * _CSV_BYTES_PER_EVENT))
     for path in inputs:
-        source = writer.add_source(path)
-        events = writer.trial(path.stem, sources=[source]).events(sensor)
+        hashing = _parse_pool().submit(writer.add_source, path)
+        trial = writer.trial(path.stem)
+        events = trial.events(sensor)
         polarity = PolarityConvention()
         for first_line, table, n_bytes in read_csv_blocks(path, block_bytes=block_bytes):
             p = polarity.to_pm1(table["p"], path=path, first_row=first_line, row_label="line")
@@ -153,46 +181,70 @@ def ingest_events_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
             progress.advance(n_bytes)
         if events.close() == 0:
             raise InputError("no events after the header", path=path, where="line 2")
+        link_source(trial, hashing)
     progress.finish()
 
 
-def read_csv_blocks(path: Path, *, block_bytes: int = 1 << 25
+def read_csv_blocks(path: Path, *, block_bytes: int = _CSV_BLOCK_BYTES
                     ) -> Iterator[tuple[int, dict[str, np.ndarray], int]]:
     """Parse an event CSV block by block.
 
-    Yields ``(first_line, columns, n_bytes)``: the file line number of the block's first
-    row (the header is line 1), ``{"t", "x", "y", "p"}`` -> (n,) int64 arrays, and the
-    bytes the block took in the file. Raises InputError naming the first bad line.
+    Yields ``(first_line, columns, n_bytes)`` in file order: the file line number of the
+    block's first row (the header is line 1), ``{"t", "x", "y", "p"}`` -> (n,) int64
+    arrays, and the bytes the block took in the file. Raises InputError naming the first
+    bad line. Blocks are parsed ahead in a thread pool (pandas' C tokenizer and integer
+    conversion run without the GIL), at most :data:`_BLOCKS_AHEAD` at a time, so memory
+    stays bounded.
     """
+    import pandas  # noqa: F401  (imported here, once, not by the workers; NPY needs none)
+
     with open(path, "rb") as f:
         names = _read_header(f, path)
-        header_bytes = f.tell()
-        end = _data_end(f, path)
-        f.seek(header_bytes)
         dtypes = dict.fromkeys(names, np.int64)
+        pending: deque[tuple[bytes, Future[_Parsed]]] = deque()
         line = 2
-        carry = b""
-        pos = header_bytes
-        while pos < end or carry:
-            data = f.read(min(block_bytes, end - pos)) if pos < end else b""
-            pos += len(data)
-            buf = carry + data
-            if pos >= end:  # the last block; its last line may lack a newline
-                block, carry = (buf if buf.endswith(b"\n") else buf + b"\n"), b""
-            else:
-                cut = buf.rfind(b"\n") + 1
-                if cut == 0:
-                    if len(buf) > _MAX_LINE_BYTES:
-                        raise InputError(f"line is longer than {_MAX_LINE_BYTES} bytes; an event "
-                                         "CSV has one short t,x,y,p line per event", path=path,
-                                         where=f"line {line}")
-                    carry = buf
-                    continue
-                block, carry = buf[:cut], buf[cut:]
-            columns = _parse_block(block, names, dtypes, path, line)
-            n_rows = len(columns["t"])
-            yield line, columns, len(block)
-            line += n_rows
+        for block in _line_blocks(f, path, block_bytes):
+            pending.append((block, _parse_pool().submit(_parse_block, block, names, dtypes)))
+            if len(pending) < _BLOCKS_AHEAD:
+                continue
+            line = yield from _finish_block(*pending.popleft(), names, path, line)
+        while pending:
+            line = yield from _finish_block(*pending.popleft(), names, path, line)
+
+
+def _finish_block(block: bytes, job: Future[_Parsed], names: list[str], path: Path, line: int
+                  ) -> Generator[tuple[int, dict[str, np.ndarray], int], None, int]:
+    """Yield one parsed block (or raise for its first bad line); returns the next line."""
+    parsed = job.result()
+    if parsed.columns is None:
+        _raise_first_bad_line(block, names, path, line, parsed.error)
+    yield line, parsed.columns, len(block)
+    return line + len(parsed.columns["t"])
+
+
+def _line_blocks(f: io.BufferedReader, path: Path, block_bytes: int) -> Iterator[bytes]:
+    """The data lines after the header in blocks of whole lines, each ending in a newline.
+
+    Each block's end is found first (the newline after ``block_bytes``), then the block is
+    read in one piece: one fresh buffer per block, no carried partial line to join.
+    """
+    pos = f.tell()
+    end = _data_end(f)
+    while pos < end:
+        stop = pos + block_bytes
+        if stop < end:
+            f.seek(stop)
+            tail = f.read(_MAX_LINE_BYTES)
+            newline = tail.find(b"\n")
+            if newline < 0:
+                raise InputError(f"a line is longer than {_MAX_LINE_BYTES} bytes; an event CSV "
+                                 "has one short t,x,y,p line per event", path=path)
+            stop += newline + 1
+        stop = min(stop, end)
+        f.seek(pos)
+        block = f.read(stop - pos)
+        pos = stop
+        yield block if block.endswith(b"\n") else block + b"\n"  # the last line may lack one
 
 
 def _read_header(f: io.BufferedReader, path: Path) -> list[str]:
@@ -218,7 +270,7 @@ def _read_header(f: io.BufferedReader, path: Path) -> list[str]:
     return names
 
 
-def _data_end(f: io.BufferedReader, path: Path) -> int:
+def _data_end(f: io.BufferedReader) -> int:
     """File offset after the last non-blank byte (blank lines at the end are ignored)."""
     size = f.seek(0, io.SEEK_END)
     tail_start = max(0, size - _MAX_LINE_BYTES)
@@ -227,24 +279,45 @@ def _data_end(f: io.BufferedReader, path: Path) -> int:
     return tail_start + len(tail.rstrip(b" \t\r\n"))
 
 
-def _parse_block(block: bytes, names: list[str], dtypes: dict[str, type], path: Path,
-                 first_line: int) -> dict[str, np.ndarray]:
-    raw = np.frombuffer(block, dtype=np.uint8)
-    n_lines = int(np.count_nonzero(raw == ord("\n")))
+@dataclass(frozen=True)
+class _Parsed:
+    """A parsed block: its columns, or None and the parser's error (None when the block
+    parsed but its line or separator count shows a broken line)."""
+
+    columns: dict[str, np.ndarray] | None
+    error: BaseException | None = None
+
+
+def _parse_block(block: bytes, names: list[str], dtypes: dict[str, type]) -> _Parsed:
+    """Parse one block of whole lines (runs in the parse pool)."""
+    import pandas as pd
+
     try:
-        with warnings.catch_warnings():
-            # pandas warns, then drops data, when a first line has extra fields
-            warnings.simplefilter("error")
-            table = pd.read_csv(io.BytesIO(block), header=None, names=names, dtype=dtypes,
-                                engine="c", na_filter=False, skip_blank_lines=False,
-                                index_col=False)
+        table = pd.read_csv(io.BytesIO(block), header=None, names=names, dtype=dtypes,
+                            engine="c", na_filter=False, skip_blank_lines=False)
     except (ValueError, OverflowError, TypeError, Warning) as exc:
-        _raise_first_bad_line(block, names, path, first_line, exc)
-    # pandas drops an empty trailing field silently; counting separators catches it
-    n_commas = int(np.count_nonzero(raw == ord(",")))
-    if len(table) != n_lines or n_commas != (len(names) - 1) * n_lines:
-        _raise_first_bad_line(block, names, path, first_line, None)
-    return {name: table[name].to_numpy() for name in COLUMNS}
+        return _Parsed(None, exc)
+    # pandas can take a first column as the index, or drop an empty trailing field,
+    # without an error; counting separators catches both (an empty line fails the int
+    # parse, so every line gave one row)
+    n_commas = int(np.count_nonzero(np.frombuffer(block, dtype=np.uint8) == ord(",")))
+    if n_commas != (len(names) - 1) * len(table):
+        return _Parsed(None)
+    return _Parsed({name: table[name].to_numpy() for name in COLUMNS})
+
+
+def _parse_pool() -> ThreadPoolExecutor:
+    """The process-wide CSV parse pool (made again after a fork, whose child has no
+    threads of its parent)."""
+    global _POOL, _POOL_PID
+    with _POOL_LOCK:
+        if _POOL is None or _POOL_PID != os.getpid():
+            workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+                else (os.cpu_count() or 1)
+            _POOL = ThreadPoolExecutor(max_workers=max(1, workers),
+                                       thread_name_prefix="tactile-csv")
+            _POOL_PID = os.getpid()
+        return _POOL
 
 
 def _raise_first_bad_line(block: bytes, names: list[str], path: Path, first_line: int,
@@ -285,8 +358,9 @@ def ingest_events_npy(inputs: list[Path], writer: StoreWriter, options: IngestOp
     progress.start(sum(_regular_file(p).stat().st_size for p in inputs), "events NPY")
     for path in inputs:
         dtype, n, offset = _npy_layout(path)
-        source = writer.add_source(path)
-        events = writer.trial(path.stem, sources=[source]).events(sensor)
+        hashing = _parse_pool().submit(writer.add_source, path)
+        trial = writer.trial(path.stem)
+        events = trial.events(sensor)
         polarity = PolarityConvention()
         chunk = max(1, options.chunk_events)
         buffer = np.empty(min(chunk, n), dtype=dtype)
@@ -306,6 +380,7 @@ def ingest_events_npy(inputs: list[Path], writer: StoreWriter, options: IngestOp
                 progress.advance(block.nbytes)
         if events.close() == 0:
             raise InputError("the array holds no events", path=path)
+        link_source(trial, hashing)
     progress.finish()
 
 

@@ -42,7 +42,9 @@ class Figure:
     caption: str
 
 
-def event_counts(t_us: np.ndarray, p: np.ndarray, *, bin_us: int = BIN_US) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def event_counts(
+    t_us: np.ndarray, p: np.ndarray, *, bin_us: int = BIN_US
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Events per bin: (bin start in s from the first event (n_bins,), ON counts, OFF counts)."""
     if t_us.size == 0:
         return np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64)
@@ -84,35 +86,80 @@ def _shade_labels(ax, t: np.ndarray, labels: np.ndarray, classes: list[str]) -> 
     for s, e in zip(starts, ends, strict=True):
         k = int(labels[s])
         name = classes[k] if 0 <= k < len(classes) else str(k)
-        ax.axvspan(t[s], t[min(e, len(t) - 1)], color=LABEL_COLOURS[k % len(LABEL_COLOURS)], lw=0,
-                   label=None if name in seen else name, zorder=0)
+        ax.axvspan(
+            t[s],
+            t[min(e, len(t) - 1)],
+            color=LABEL_COLOURS[k % len(LABEL_COLOURS)],
+            lw=0,
+            label=None if name in seen else name,
+            zorder=0,
+        )
         seen.add(name)
+
+
+def _baseline_dominates(data: np.ndarray) -> tuple[bool, np.ndarray]:
+    """Whether per-channel offsets hide the signal, and those offsets (first 5 % mean).
+
+    Raw taxel counts sit at 15k..40k and change by hundreds: drawn as they are, every line
+    is flat. When the spread of channel offsets is more than 5x the largest within-channel
+    variation, the figure draws the change from the start instead.
+    """
+    k = max(1, len(data) // 20)
+    offsets = data[:k].mean(axis=0)
+    spread = float(np.ptp(offsets)) if offsets.size else 0.0
+    variation = float(np.max(np.std(data - offsets, axis=0))) if data.size else 0.0
+    return spread > 5 * max(variation, 1e-12), offsets
+
+
+def _varying_label(s: h5py.Group) -> tuple[str, np.ndarray, list[str]] | None:
+    """The categorical per-sample label with the most changes of class (None if all constant)."""
+    if "sample_labels" not in s:
+        return None
+    best, best_changes = None, 0
+    for lname, ds in s["sample_labels"].items():
+        if "classes" not in ds.attrs:
+            continue
+        values = ds[()]
+        changes = int(np.count_nonzero(np.diff(values)))
+        if changes > best_changes:
+            classes = [c.decode() if isinstance(c, bytes) else str(c) for c in ds.attrs["classes"]]
+            best, best_changes = (lname, values, classes), changes
+    return best
 
 
 def _signals_figure(h5: h5py.File, g: h5py.Group, title: str, out: Path) -> None:
     streams = list(g.items())
     fig, axes = plt.subplots(len(streams), 1, figsize=(12, 2.6 * len(streams)), squeeze=False)
     for ax, (name, s) in zip(axes[:, 0], streams, strict=True):
-        data, t = s["data"], s["t_s"][()]
+        data, t = s["data"][()], s["t_s"][()]
         sensor = h5["sensors"][s.attrs["sensor"]]
         channels = sensor["channel_names"].asstr()[()] if "channel_names" in sensor else []
         units = sensor["channel_units"].asstr()[()] if "channel_units" in sensor else []
+        delta, offsets = _baseline_dominates(data)
+        if delta:
+            data = data - offsets
         step = max(1, len(t) // 20000)  # draw at most ~20k points per line
         shown = data[::step, :MAX_CHANNELS_DRAWN]
         for k in range(shown.shape[1]):
-            ax.plot(t[::step], shown[:, k], lw=0.7, label=channels[k] if k < len(channels) else str(k))
-        if "sample_labels" in s:
-            for lname, ds in s["sample_labels"].items():
-                if "classes" in ds.attrs:
-                    classes = [c.decode() if isinstance(c, bytes) else str(c) for c in ds.attrs["classes"]]
-                    _shade_labels(ax, t, ds[()], classes)
-                    break
+            ax.plot(
+                t[::step], shown[:, k], lw=0.7, label=channels[k] if k < len(channels) else str(k)
+            )
+        if data.shape[1] > MAX_CHANNELS_DRAWN:
+            ax.plot(t[::step], data[::step].mean(axis=1), lw=1.2, color="k", label="mean of all")
+        label = _varying_label(s)
+        if label is not None:
+            _shade_labels(ax, t, label[1], label[2])
         more = data.shape[1] - shown.shape[1]
         unit = f" ({units[0]})" if len(set(units)) == 1 else ""
-        ax.set_ylabel(f"{name}{unit}")
-        ax.set_title(f"{name}: {data.shape[0]} samples x {data.shape[1]} channels"
-                     + (f" ({more} not drawn)" if more > 0 else ""), fontsize=9)
-        ax.legend(loc="upper right", fontsize=7, ncol=4)
+        ax.set_ylabel(("change in " if delta else "") + f"{name}{unit}", fontsize=8)
+        ax.set_title(
+            f"{name}: {data.shape[0]} samples x {data.shape[1]} channels"
+            + (f" ({more} not drawn)" if more > 0 else "")
+            + (", change from the first 5 %" if delta else "")
+            + (f"; shaded: {label[0]}" if label else ""),
+            fontsize=9,
+        )
+        ax.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False)
     axes[-1, 0].set_xlabel("time (s)")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
@@ -122,7 +169,9 @@ def _signals_figure(h5: h5py.File, g: h5py.Group, title: str, out: Path) -> None
 
 def _frames_figure(g: h5py.Group, title: str, out: Path) -> None:
     images, ref = g["images"], g["reference"][()]
-    diffs = np.array([np.abs(images[i].astype(np.int16) - ref).mean() for i in range(images.shape[0])])
+    diffs = np.array(
+        [np.abs(images[i].astype(np.int16) - ref).mean() for i in range(images.shape[0])]
+    )
     k = int(np.argmax(diffs)) if diffs.size else 0
     frame = images[k] if images.shape[0] else ref
     diff = np.abs(frame.astype(np.int16) - ref).sum(axis=2)
@@ -159,8 +208,13 @@ def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> 
             if "events" in g:
                 sensor = h5["sensors"][g["events"].attrs["sensor"]]
                 f = out_dir / f"{path.stem}__{name}__events.png"
-                _events_figure(g["events"], int(sensor.attrs["width_px"]), int(sensor.attrs["height_px"]),
-                               title, f)
+                _events_figure(
+                    g["events"],
+                    int(sensor.attrs["width_px"]),
+                    int(sensor.attrs["height_px"]),
+                    title,
+                    f,
+                )
                 figures.append(Figure(f, f"{title}: events per 20 ms and net polarity per pixel"))
             if "signals" in g:
                 f = out_dir / f"{path.stem}__{name}__signals.png"
@@ -173,32 +227,50 @@ def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> 
     return figures
 
 
-def write_html(files: list[Path], out_dir: str | Path, *, max_trials: int = 4,
-               title: str = "tactile quick look") -> Path:
+def write_html(
+    files: list[Path],
+    out_dir: str | Path,
+    *,
+    max_trials: int = 4,
+    title: str = "tactile quick look",
+) -> Path:
     """One self-contained HTML page (figures embedded) with a summary and figures per file."""
     out_dir = Path(out_dir)
-    parts = [f"<!doctype html><meta charset='utf-8'><title>{html.escape(title)}</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
-             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;font-size:13px}"
-             "img{max-width:100%}</style>", f"<h1>{html.escape(title)}</h1>"]
+    parts = [
+        f"<!doctype html><meta charset='utf-8'><title>{html.escape(title)}</title>",
+        "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
+        "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;font-size:13px}"
+        "img{max-width:100%}</style>",
+        f"<h1>{html.escape(title)}</h1>",
+    ]
     for f in files:
         s = summarize(f)
-        parts.append(f"<h2>{html.escape(f.name)}</h2><p>schema {s.schema_version}, tactile "
-                     f"{html.escape(s.tool_version)}, {len(s.trials)} trials, {s.total_duration_s:.2f} s, "
-                     f"{s.n_sources} source files; command: <code>{html.escape(s.command)}</code></p>")
-        parts.append("<table><tr><th>sensor</th><th>kind</th><th>rate (Hz)</th><th>channels</th>"
-                     "<th>geometry</th></tr>")
+        parts.append(
+            f"<h2>{html.escape(f.name)}</h2><p>schema {s.schema_version}, tactile "
+            f"{html.escape(s.tool_version)}, {len(s.trials)} trials, {s.total_duration_s:.2f} s, "
+            f"{s.n_sources} source files; command: <code>{html.escape(s.command)}</code></p>"
+        )
+        parts.append(
+            "<table><tr><th>sensor</th><th>kind</th><th>rate (Hz)</th><th>channels</th>"
+            "<th>geometry</th></tr>"
+        )
         for sensor in s.sensors:
-            parts.append(f"<tr><td>{html.escape(sensor.name)}</td><td>{sensor.kind}</td>"
-                         f"<td>{sensor.sample_rate_hz:g}</td><td>{sensor.n_channels}</td>"
-                         f"<td>{sensor.geometry}</td></tr>")
+            parts.append(
+                f"<tr><td>{html.escape(sensor.name)}</td><td>{sensor.kind}</td>"
+                f"<td>{sensor.sample_rate_hz:g}</td><td>{sensor.n_channels}</td>"
+                f"<td>{sensor.geometry}</td></tr>"
+            )
         parts.append("</table>")
         if s.label_counts:
-            parts.append("<p>label counts: <code>" + html.escape(json.dumps(s.label_counts)) + "</code></p>")
+            parts.append(
+                "<p>label counts: <code>" + html.escape(json.dumps(s.label_counts)) + "</code></p>"
+            )
         for fig in quicklook(f, out_dir, max_trials=max_trials):
             data = base64.b64encode(fig.path.read_bytes()).decode()
-            parts.append(f"<figure><img src='data:image/png;base64,{data}'>"
-                         f"<figcaption>{html.escape(fig.caption)}</figcaption></figure>")
+            parts.append(
+                f"<figure><img src='data:image/png;base64,{data}'>"
+                f"<figcaption>{html.escape(fig.caption)}</figcaption></figure>"
+            )
     page = out_dir / "index.html"
     buf = io.StringIO("\n".join(parts))
     tmp = page.with_name(".index.html.tmp")

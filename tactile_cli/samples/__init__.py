@@ -35,15 +35,34 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     geometry = ["--width", str(EVENT_WIDTH), "--height", str(EVENT_HEIGHT)]
-    write_events_csv(out / "events.csv", n_events, width=EVENT_WIDTH, height=EVENT_HEIGHT, seed=seed,
-                     polarity="01", mean_dt_us=5)
-    write_events_npy(out / "events.npy", n_events, width=EVENT_WIDTH, height=EVENT_HEIGHT, seed=seed + 1,
-                     mean_dt_us=5)
+    write_events_csv(
+        out / "events.csv",
+        n_events,
+        width=EVENT_WIDTH,
+        height=EVENT_HEIGHT,
+        seed=seed,
+        polarity="01",
+        mean_dt_us=5,
+    )
+    write_events_npy(
+        out / "events.npy",
+        n_events,
+        width=EVENT_WIDTH,
+        height=EVENT_HEIGHT,
+        seed=seed + 1,
+        mean_dt_us=5,
+    )
     write_accel_tree(out / "accel_tree", seconds=0.5, seed=seed)
     taxel = write_taxel_recording(out / "taxel", seed=seed)
     for k in (1, 2):
-        write_image_sequence(out / "visuotactile" / f"press_{k:02d}", n_frames=12, width=160, height=120,
-                             seed=seed + k, frame_rate_hz=30.0)
+        write_image_sequence(
+            out / "visuotactile" / f"press_{k:02d}",
+            n_frames=12,
+            width=160,
+            height=120,
+            seed=seed + k,
+            frame_rate_hz=30.0,
+        )
     return {
         "paths": {"root": out},
         "commands": {
@@ -51,7 +70,10 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
             "events_npy": ["ingest", str(out / "events.npy"), *geometry],
             "accel": ["ingest", str(out / "accel_tree"), "--format", "accel-tree"],
             "taxel": ["ingest", str(out / "taxel"), "--mapping", str(taxel["mapping"])],
-            "visuotactile": ["ingest", str(out / "visuotactile" / "press_01"),
-                             str(out / "visuotactile" / "press_02")],
+            "visuotactile": [
+                "ingest",
+                str(out / "visuotactile" / "press_01"),
+                str(out / "visuotactile" / "press_02"),
+            ],
         },
     }

@@ -11,6 +11,8 @@ from .validate import ValidationReport as ValidationReport
 from .validate import Violation as Violation
 from .validate import validate_file as validate_file
 from .writer import Compression as Compression
+from .writer import EventAppender as EventAppender
+from .writer import FrameAppender as FrameAppender
 from .writer import StoreWriter as StoreWriter
 from .writer import TrialWriter as TrialWriter
 from .writer import safe_name as safe_name

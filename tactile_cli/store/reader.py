@@ -87,7 +87,9 @@ def summarize(path: str | Path) -> FileSummary:
             tool_version=_plain(a.get("tool_version", "")),
             created_utc=_plain(a.get("created_utc", "")),
             command=_plain(a.get("command", "")),
-            n_sources=int(h5["provenance/sources/path"].shape[0]) if "provenance/sources/path" in h5 else 0,
+            n_sources=int(h5["provenance/sources/path"].shape[0])
+            if "provenance/sources/path" in h5
+            else 0,
         )
         for name, g in h5["sensors"].items():
             n_ch = int(g["channel_names"].shape[0]) if "channel_names" in g else 0
@@ -97,22 +99,32 @@ def summarize(path: str | Path) -> FileSummary:
             elif "taxel_positions_m" in g:
                 geometry = f"{g['taxel_positions_m'].shape[0]} taxels"
             units = sorted(set(g["channel_units"].asstr()[()])) if "channel_units" in g else []
-            summary.sensors.append(SensorInfo(name, _plain(g.attrs["kind"]),
-                                              float(g.attrs["sample_rate_hz"]), n_ch, geometry, units))
+            summary.sensors.append(
+                SensorInfo(
+                    name,
+                    _plain(g.attrs["kind"]),
+                    float(g.attrs["sample_rate_hz"]),
+                    n_ch,
+                    geometry,
+                    units,
+                )
+            )
         for name, g in h5["trials"].items():
             streams = {}
             if "signals" in g:
                 for s_name, s in g["signals"].items():
                     streams[s_name] = list(s["data"].shape)
-            summary.trials.append(TrialInfo(
-                name=name,
-                duration_s=float(g.attrs.get("duration_s", 0.0)),
-                split=_plain(g.attrs.get("split", "")),
-                labels={k: _plain(v) for k, v in g["labels"].attrs.items()},
-                n_events=int(g["events/t"].shape[0]) if "events" in g else 0,
-                streams=streams,
-                n_frames=int(g["frames/images"].shape[0]) if "frames" in g else 0,
-            ))
+            summary.trials.append(
+                TrialInfo(
+                    name=name,
+                    duration_s=float(g.attrs.get("duration_s", 0.0)),
+                    split=_plain(g.attrs.get("split", "")),
+                    labels={k: _plain(v) for k, v in g["labels"].attrs.items()},
+                    n_events=int(g["events/t"].shape[0]) if "events" in g else 0,
+                    streams=streams,
+                    n_frames=int(g["frames/images"].shape[0]) if "frames" in g else 0,
+                )
+            )
     return summary
 
 
@@ -130,8 +142,11 @@ def read_events(path: str | Path, trial: str) -> dict[str, np.ndarray]:
         return {k: g[k][()] for k in ("x", "y", "t", "p")}
 
 
-def read_events_window(path: str | Path, trial: str, t0_ms: int, t1_ms: int) -> dict[str, np.ndarray]:
+def read_events_window(
+    path: str | Path, trial: str, t0_ms: int, t1_ms: int
+) -> dict[str, np.ndarray]:
     """Events with ``origin + t0_ms <= t < origin + t1_ms`` through the millisecond index."""
+    check_readable(path)
     with h5py.File(path, "r") as h5:
         g = h5[f"trials/{trial}/events"]
         idx = g["ms_to_idx"]
@@ -150,5 +165,9 @@ def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
         if "sample_labels" in g:
             for k, ds in g["sample_labels"].items():
                 labels[k] = ds[()]
-        return {"data": g["data"][()], "t_s": g["t_s"][()], "sensor": _plain(g.attrs["sensor"]),
-                "sample_labels": labels}
+        return {
+            "data": g["data"][()],
+            "t_s": g["t_s"][()],
+            "sensor": _plain(g.attrs["sensor"]),
+            "sample_labels": labels,
+        }

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 import warnings
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +22,8 @@ from .spec import NodeSpec, Spec, load_spec, pattern_to_regex
 
 #: Elements read per block when a check scans a dataset.
 BLOCK = 1 << 22
+#: Checks that read every value of a dataset (skipped for datasets verified while written).
+_VALUE_SCANS = frozenset({"values_in", "non_decreasing", "finite", "below_sensor_attr"})
 
 
 @dataclass(frozen=True)
@@ -58,8 +60,15 @@ class ValidationReport:
         }
 
 
-def validate_file(path: str | Path, *, spec: Spec | None = None) -> ValidationReport:
-    """Validate one file; never raises for a bad file, only reports."""
+def validate_file(
+    path: str | Path, *, spec: Spec | None = None, verified: Collection[str] = ()
+) -> ValidationReport:
+    """Validate one file; never raises for a bad file, only reports.
+
+    verified: HDF5 paths of datasets whose content the caller has already checked with the
+    same rules while writing them (the writer's event appender does); their value scans
+    (ranges, polarity, time order, finiteness) are skipped, every other check still runs.
+    """
     spec = spec or load_spec()
     report = ValidationReport(file=str(path), schema_version=None)
     try:
@@ -68,16 +77,25 @@ def validate_file(path: str | Path, *, spec: Spec | None = None) -> ValidationRe
         report.violations.append(Violation("/", "file not found"))
         return report
     except OSError as exc:
-        report.violations.append(Violation("/", f"not a readable HDF5 file ({exc.__class__.__name__})"))
+        report.violations.append(
+            Violation("/", f"not a readable HDF5 file ({exc.__class__.__name__})")
+        )
         return report
     with h5:
-        _Validator(h5, spec, report).run()
+        _Validator(h5, spec, report, frozenset(verified)).run()
     return report
 
 
 class _Validator:
-    def __init__(self, h5: h5py.File, spec: Spec, report: ValidationReport):
+    def __init__(
+        self,
+        h5: h5py.File,
+        spec: Spec,
+        report: ValidationReport,
+        verified: frozenset[str] = frozenset(),
+    ):
         self.h5 = h5
+        self.verified = verified
         self.spec = spec
         self.report = report
         self.strict = True  # False for a newer minor version: unknown nodes are allowed
@@ -90,7 +108,9 @@ class _Validator:
         if not self._check_version():
             return
         paths = self._all_paths()
-        instances: dict[str, list[tuple[str, dict[str, str]]]] = {n.path: [] for n in self.spec.nodes}
+        instances: dict[str, list[tuple[str, dict[str, str]]]] = {
+            n.path: [] for n in self.spec.nodes
+        }
         for p in paths:
             m = self.spec.match(p)
             if m is None:
@@ -112,22 +132,29 @@ class _Validator:
         version = _as_str(attrs.get("schema_version"))
         self.report.schema_version = version
         if name != self.spec.name:
-            self.fail("/", f"attribute schema_name is {name!r}, expected {self.spec.name!r}: "
-                      "this is not a tactile file; create one with `tactile ingest`")
+            self.fail(
+                "/",
+                f"attribute schema_name is {name!r}, expected {self.spec.name!r}: "
+                "this is not a tactile file; create one with `tactile ingest`",
+            )
             return False
         if version is None or not re.fullmatch(r"\d+\.\d+", version):
             self.fail("/", f"attribute schema_version is {version!r}, expected MAJOR.MINOR")
             return False
         major, minor = (int(v) for v in version.split("."))
         if major != self.spec.major:
-            self.fail("/", f"schema version {version} is not readable by this tool (reads "
-                      f"{self.spec.major}.x); re-create the file with `tactile ingest` of this version")
+            self.fail(
+                "/",
+                f"schema version {version} is not readable by this tool (reads "
+                f"{self.spec.major}.x); re-create the file with `tactile ingest` of this version",
+            )
             return False
         if minor > self.spec.minor:
             self.strict = False
             self.report.notes.append(
                 f"file schema {version} is newer than this tool's {self.spec.version}: "
-                "nodes this tool does not know were not checked")
+                "nodes this tool does not know were not checked"
+            )
         return True
 
     def _all_paths(self) -> list[str]:
@@ -184,7 +211,9 @@ class _Validator:
         if "ndim" in rules and ds.ndim != rules["ndim"]:
             self.fail(h5_path, f"has {ds.ndim} dimensions {ds.shape}, expected {rules['ndim']}")
 
-    def _check_attributes(self, attr_rules: dict[str, Any], obj: h5py.HLObject, h5_path: str) -> None:
+    def _check_attributes(
+        self, attr_rules: dict[str, Any], obj: h5py.HLObject, h5_path: str
+    ) -> None:
         attrs = obj.attrs
         for key, rule in attr_rules.items():
             if key == "*":
@@ -239,11 +268,15 @@ class _Validator:
             elif "ref_kind" in rule:
                 kind_there = _as_str(self.h5[target].attrs.get("kind"))
                 if kind_there not in rule["ref_kind"]:
-                    self.fail(where, f"refers to sensor {target} of kind {kind_there!r}, "
-                              f"expected one of {rule['ref_kind']}")
+                    self.fail(
+                        where,
+                        f"refers to sensor {target} of kind {kind_there!r}, "
+                        f"expected one of {rule['ref_kind']}",
+                    )
 
-    def _check_required(self, instances: dict[str, list[tuple[str, dict[str, str]]]],
-                        present: set[str]) -> None:
+    def _check_required(
+        self, instances: dict[str, list[tuple[str, dict[str, str]]]], present: set[str]
+    ) -> None:
         for node in self.spec.nodes:
             rules = node.rules
             if rules.get("required") and not node.placeholders:
@@ -263,30 +296,38 @@ class _Validator:
                         self.fail(child, f"required {node.type} is missing")
 
     # -- content checks ---------------------------------------------------------------
-    def _expand(self, pattern: str, instances: dict[str, list[tuple[str, dict[str, str]]]]
-                ) -> Iterator[str]:
+    def _expand(
+        self, pattern: str, instances: dict[str, list[tuple[str, dict[str, str]]]]
+    ) -> Iterator[str]:
         """Concrete paths matching a pattern that exist in the file."""
         if pattern in instances:
             for p, _ in instances[pattern]:
                 yield p
             return
         regex, _ = pattern_to_regex(pattern)
-        for node_path, found in instances.items():
+        for found in instances.values():
             for p, _ in found:
                 if regex.fullmatch(p):
                     yield p
 
-    def _run_check(self, check: dict[str, Any], instances: dict[str, list[tuple[str, dict[str, str]]]]
-                   ) -> None:
+    def _run_check(
+        self, check: dict[str, Any], instances: dict[str, list[tuple[str, dict[str, str]]]]
+    ) -> None:
         name = check["check"]
         if name == "same_length":
             self._check_same_length(check["paths"], instances)
             return
         for p in list(self._expand(check["path"], instances)):
+            if p in self.verified and name in _VALUE_SCANS:
+                continue
             obj = self.h5[p]
             if name == "values_in":
-                self._scan(obj, p, lambda a, allowed=check["values"]: ~np.isin(a, allowed),
-                           f"values outside {check['values']}")
+                self._scan(
+                    obj,
+                    p,
+                    lambda a, allowed=check["values"]: ~np.isin(a, allowed),
+                    f"values outside {check['values']}",
+                )
             elif name == "non_decreasing":
                 self._check_non_decreasing(obj, p)
             elif name == "finite":
@@ -306,8 +347,9 @@ class _Validator:
             else:  # a spec from a newer tool may name checks this one lacks
                 self.report.notes.append(f"check {name!r} of the spec is not known to this tool")
 
-    def _check_same_length(self, patterns: list[str],
-                           instances: dict[str, list[tuple[str, dict[str, str]]]]) -> None:
+    def _check_same_length(
+        self, patterns: list[str], instances: dict[str, list[tuple[str, dict[str, str]]]]
+    ) -> None:
         first_regex, _ = pattern_to_regex(patterns[0])
         groups: dict[tuple[str, ...], list[str]] = {}
         for pat in patterns:
@@ -328,7 +370,7 @@ class _Validator:
 
     def _scan(self, ds: h5py.Dataset, p: str, bad_mask, what: str) -> None:
         for start in range(0, ds.shape[0], BLOCK):
-            block = ds[start:start + BLOCK]
+            block = ds[start : start + BLOCK]
             bad = bad_mask(block)
             if bad.any():
                 i = int(np.flatnonzero(bad.reshape(len(block), -1).any(axis=1))[0]) + start
@@ -338,15 +380,18 @@ class _Validator:
     def _check_non_decreasing(self, ds: h5py.Dataset, p: str) -> None:
         prev = None
         for start in range(0, ds.shape[0], BLOCK):
-            block = ds[start:start + BLOCK]
+            block = ds[start : start + BLOCK]
             if prev is not None and block.size and block[0] < prev:
                 self.fail(p, f"time goes backwards at index {start} ({block[0]} after {prev})")
                 return
             d = np.diff(block)
             if (d < 0).any():
                 i = int(np.flatnonzero(d < 0)[0])
-                self.fail(p, f"time goes backwards at index {start + i + 1} "
-                          f"({block[i + 1]} after {block[i]})")
+                self.fail(
+                    p,
+                    f"time goes backwards at index {start + i + 1} "
+                    f"({block[i + 1]} after {block[i]})",
+                )
                 return
             if block.size:
                 prev = block[-1]
@@ -367,7 +412,10 @@ class _Validator:
         self._scan(ds, p, lambda a: a >= limit, f"values >= {attr} of {sensor.name} ({limit})")
 
     def _check_ms_index(self, group: h5py.Group, p: str) -> None:
-        if not all(k in group for k in ("t", "ms_to_idx")) or "ms_index_origin_us" not in group.attrs:
+        if (
+            not all(k in group for k in ("t", "ms_to_idx"))
+            or "ms_index_origin_us" not in group.attrs
+        ):
             return
         t, idx = group["t"], group["ms_to_idx"][()]
         origin = int(group.attrs["ms_index_origin_us"])
@@ -377,7 +425,9 @@ class _Validator:
                 self.fail(f"{p}/ms_to_idx", "is empty but the trial has events")
             return
         if idx[0] != 0 or (np.diff(idx) < 0).any() or idx[-1] > n:
-            self.fail(f"{p}/ms_to_idx", "must start at 0, never decrease and stay <= the event count")
+            self.fail(
+                f"{p}/ms_to_idx", "must start at 0, never decrease and stay <= the event count"
+            )
             return
         # spot-check: each sampled entry points at the first event at or after its millisecond
         probe = np.unique(np.linspace(0, idx.size - 1, num=min(idx.size, 64)).astype(np.int64))
@@ -385,8 +435,10 @@ class _Validator:
             i = int(idx[k])
             edge = origin + 1000 * int(k)
             if (i < n and t[i] < edge) or (i > 0 and t[i - 1] >= edge):
-                self.fail(f"{p}/ms_to_idx", f"entry {k} ({i}) is not the first event at or after "
-                          f"{edge} us")
+                self.fail(
+                    f"{p}/ms_to_idx",
+                    f"entry {k} ({i}) is not the first event at or after {edge} us",
+                )
                 return
 
     def _check_columns(self, ds: h5py.Dataset, p: str) -> None:
@@ -406,7 +458,9 @@ class _Validator:
             shape = group[name].shape
             hw = shape[-3:-1]
             if h is not None and w is not None and hw != (int(h), int(w)):
-                self.fail(f"{p}/{name}", f"frames are {hw[1]}x{hw[0]}, sensor {sensor.name} is {w}x{h}")
+                self.fail(
+                    f"{p}/{name}", f"frames are {hw[1]}x{hw[0]}, sensor {sensor.name} is {w}x{h}"
+                )
             if shape[-1] != 3:
                 self.fail(f"{p}/{name}", f"last axis has {shape[-1]} colour channels, expected 3")
 
@@ -447,13 +501,20 @@ def check_readable(path: str | Path) -> str:
         name = _as_str(h5.attrs.get("schema_name"))
         version = _as_str(h5.attrs.get("schema_version")) or "?"
     if name != spec.name:
-        raise SchemaError(f"{path}: not a tactile HDF5 file (schema_name {name!r}); "
-                          "create one with `tactile ingest`")
+        raise SchemaError(
+            f"{path}: not a tactile HDF5 file (schema_name {name!r}); "
+            "create one with `tactile ingest`"
+        )
     major, _, minor = version.partition(".")
     if major != str(spec.major):
-        raise SchemaError(f"{path}: schema version {version} cannot be read by this tool "
-                          f"(reads {spec.major}.x); re-create it with this version's `tactile ingest`")
+        raise SchemaError(
+            f"{path}: schema version {version} cannot be read by this tool "
+            f"(reads {spec.major}.x); re-create it with this version's `tactile ingest`"
+        )
     if minor.isdigit() and int(minor) > spec.minor:
-        warnings.warn(f"{path}: schema {version} is newer than this tool's {spec.version}; "
-                      "parts it does not know are ignored", stacklevel=2)
+        warnings.warn(
+            f"{path}: schema {version} is newer than this tool's {spec.version}; "
+            "parts it does not know are ignored",
+            stacklevel=2,
+        )
     return version

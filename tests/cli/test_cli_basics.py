@@ -17,10 +17,13 @@ runner = CliRunner()
 
 def _file(path):
     with StoreWriter(path, command="test") as w:
-        s = w.add_sensor("acc", kind="accelerometer", sample_rate_hz=10, channel_names=["a"], channel_units="g")
+        s = w.add_sensor(
+            "acc", kind="accelerometer", sample_rate_hz=10, channel_names=["a"], channel_units="g"
+        )
         for i, obj in enumerate(["wood", "wood", "plastic"]):
             w.trial(f"t{i}", labels={"object": obj}).write_signal(
-                "acc", sensor=s, data=np.zeros((20, 1)), t_s=np.arange(20) / 10)
+                "acc", sensor=s, data=np.zeros((20, 1)), t_s=np.arange(20) / 10
+            )
         w.commit()
     return path
 
@@ -78,4 +81,7 @@ def test_validate_exit_codes_and_paths(tmp_path):
     reports = json.loads(result.output)
     assert [r["valid"] for r in reports] == [True, False]
     paths = {v["path"] for v in reports[1]["violations"]}
-    assert paths == {"/trials/t1/signals/acc (attribute 'sensor')", "/trials/t2 (attribute 'duration_s')"}
+    assert paths == {
+        "/trials/t1/signals/acc (attribute 'sensor')",
+        "/trials/t2 (attribute 'duration_s')",
+    }

@@ -35,7 +35,11 @@ def test_unknown_and_mixed_formats(tmp_path):
 
 def test_parse_labels():
     assert parse_labels(["object=box", "speed=0.02", "force_level=3", "note=a=b"]) == {
-        "object": "box", "speed": 0.02, "force_level": 3, "note": "a=b"}
+        "object": "box",
+        "speed": 0.02,
+        "force_level": 3,
+        "note": "a=b",
+    }
     with pytest.raises(InputError, match="--label 'object' must look like key=value"):
         parse_labels(["object"])
 
@@ -57,7 +61,9 @@ def test_missing_input_names_the_file(tmp_path):
 def test_cli_input_errors_are_one_line_exit_2(tmp_path, args, message):
     (tmp_path / "notes.txt").write_text("hello")
     out = tmp_path / "out.h5"
-    result = runner.invoke(app, ["ingest", *[a.format(tmp=tmp_path) for a in args], "--out", str(out)])
+    result = runner.invoke(
+        app, ["ingest", *[a.format(tmp=tmp_path) for a in args], "--out", str(out)]
+    )
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("tactile: error: ")
@@ -70,8 +76,9 @@ def test_cli_existing_output_needs_overwrite(tmp_path):
     out = tmp_path / "out.h5"
     out.write_bytes(b"earlier")
     (tmp_path / "notes.txt").write_text("x")
-    result = runner.invoke(app, ["ingest", str(tmp_path / "notes.txt"), "--format", "events-csv",
-                                 "--out", str(out)])
+    result = runner.invoke(
+        app, ["ingest", str(tmp_path / "notes.txt"), "--format", "events-csv", "--out", str(out)]
+    )
     assert result.exit_code == 2
     assert f"{out}: output exists; pass --overwrite to replace it" in result.stderr
     assert out.read_bytes() == b"earlier"

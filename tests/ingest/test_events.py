@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import IngestOptions, events_table, ingest
 from tactile_cli.ingest.events_table import PolarityConvention, read_csv_blocks
 from tactile_cli.samples.events import make_events, write_events_csv, write_events_npy
 from tactile_cli.store import StoreWriter, read_events, read_events_window, validate_file
@@ -171,6 +171,14 @@ def test_several_csv_files_are_trials_of_one_sensor(tmp_path):
                  options=_opts(sensor_name="dvs"))
     with h5py.File(out) as f:
         assert list(f["sensors"]) == ["dvs"] and sorted(f["trials"]) == ["a", "b"]
+        # each trial points at its own source (hashed while the file was parsed)
+        paths = f["provenance/sources/path"].asstr()[()].tolist()
+        for name in ("a", "b"):
+            (index,) = f[f"trials/{name}"].attrs["source_index"]
+            assert paths[index] == str(tmp_path / f"{name}.csv")
+        digest = hashlib.sha256((tmp_path / "b.csv").read_bytes()).hexdigest()
+        b_index = paths.index(str(tmp_path / "b.csv"))
+        assert f["provenance/sources/sha256"].asstr()[b_index] == digest
     np.testing.assert_array_equal(_stored(out, "a")["t"], a["t"])
     np.testing.assert_array_equal(_stored(out, "b")["p"], b["p"])
 
@@ -260,7 +268,7 @@ def test_ms_to_idx_windows_match_a_brute_force_mask(tmp_path, small_chunks):
 def _csv_with(tmp_path: Path, line_no: int, edit) -> Path:
     """An otherwise valid 0/1 CSV whose line ``line_no`` (1 = header) is ``edit(line)``."""
     src = tmp_path / "bad.csv"
-    write_events_csv(src, 3_000, width=W, height=H, seed=9, polarity="01")
+    write_events_csv(src, 8_000, width=W, height=H, seed=9, polarity="01")
     lines = src.read_text().splitlines()
     lines[line_no - 1] = edit(lines[line_no - 1])
     src.write_text("\n".join(lines) + "\n")
@@ -271,10 +279,11 @@ def _fields(line: str) -> list[int]:
     return [int(v) for v in line.split(",")]
 
 
-LATE = 2_500  # a line in a later block than the first (blocks hold about 2,500 lines here)
+LATE = 6_500  # a line in the third block (``_opts`` makes 64 KiB blocks: about 2,600 lines)
 BAD_CSV = {
     "missing column": (1, lambda s: "t,x,y", r"line 1: missing column 'p'"),
     "extra column": (1, lambda s: "t,x,y,p,q", r"line 1: unexpected column 'q'"),
+    "duplicate column": (1, lambda s: "t,x,y,p,x", r"line 1: a column is named twice"),
     "no header": (1, lambda s: "5,1,2,0", r"line 1: missing columns 't', 'x', 'y', 'p'.*header"),
     "short row": (LATE, lambda s: s.rsplit(",", 1)[0], rf"line {LATE}: short line: 3 fields"),
     "extra field": (LATE, lambda s: s + ",9", rf"line {LATE}: extra field: 5 fields"),
@@ -308,6 +317,42 @@ def test_bad_csv_names_file_and_line_and_writes_nothing(tmp_path, case):
         ingest([src], out, options=_opts())
     assert "\n" not in str(info.value)
     _assert_nothing_written(tmp_path, out)
+
+
+def test_absurd_time_span_is_an_error_not_a_huge_index(tmp_path):
+    def jump(line: str) -> str:
+        t, *rest = _fields(line)
+        return ",".join(map(str, [t + 25 * 3600 * 10**6, *rest]))
+
+    src = _csv_with(tmp_path, 8_001, jump)  # the last line: 25 h after the first event
+    with pytest.raises(InputError, match=rf"^{re.escape(str(src))}, line 8001: timestamp \d+ us "
+                       r"is 25\.0 h after the first event .*are the times in microseconds\?"):
+        ingest([src], tmp_path / "o.h5", options=_opts())
+    _assert_nothing_written(tmp_path, tmp_path / "o.h5")
+
+
+def test_late_bad_line_is_past_the_first_blocks(tmp_path):
+    """The bad-line cases really exercise line numbers carried across blocks."""
+    src = _csv_with(tmp_path, 2, lambda s: s)
+    block_bytes = max(events_table._MAX_LINE_BYTES,
+                      _opts().chunk_events * events_table._CSV_BYTES_PER_EVENT)
+    starts = [line for line, _, _ in read_csv_blocks(src, block_bytes=block_bytes)]
+    assert len(starts) >= 3 and starts[2] <= LATE
+
+
+def test_float_or_nan_columns_are_refused_by_the_appender(tmp_path):
+    with StoreWriter(tmp_path / "o.h5", command="test") as w:
+        w.add_sensor("cam", kind="event_camera", sample_rate_hz=0, width_px=W, height_px=H)
+        appender = w.trial("r").events("cam")
+        x = np.array([1.0, 2.5, 3.0])
+        with pytest.raises(InputError, match=r"^f\.csv, line 8: x = 2\.5 is not a whole number"):
+            appender.append(x, x, np.arange(3), np.ones(3), source="f.csv", first_row=7,
+                            row_label="line")
+        with pytest.raises(InputError, match=r"line 9: t = nan is not a whole number"):
+            appender.append(np.ones(3), np.ones(3), np.array([1.0, 2.0, np.nan]), np.ones(3),
+                            source="f.csv", first_row=7, row_label="line")
+        appender.append(np.ones(3), np.ones(3), np.array([1.0, 2.0, 3.0]), np.ones(3))
+        assert appender.close() == 3
 
 
 def test_csv_without_geometry_or_events(tmp_path):

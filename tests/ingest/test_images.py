@@ -322,7 +322,8 @@ def test_cli_bad_run_is_one_line_exit_2_and_writes_nothing(tmp_path):
 def test_cli_fps_sets_the_frame_times(tmp_path):
     write_image_sequence(tmp_path / "press", n_frames=5, width=8, height=6, seed=0)
     out = tmp_path / "o.h5"
-    result = CliRunner().invoke(app, ["ingest", str(tmp_path / "press"), "--fps", "50", "--out", str(out)])
+    args = ["ingest", str(tmp_path / "press"), "--fps", "50", "--out", str(out)]
+    result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     with h5py.File(out) as h5:
         np.testing.assert_allclose(h5["trials/press/frames/t_s"][()], np.arange(5) / 50.0)

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
+import sys
 
 import h5py
 import numpy as np
@@ -22,18 +25,31 @@ def _write_small(path, *, n_events=5000, seed=0):
     p = rng.choice(np.array([-1, 1]), n_events)
     with StoreWriter(path, command="test", config={"a": 1}) as w:
         s = w.add_sensor("dvs", kind="event_camera", sample_rate_hz=0, width_px=64, height_px=48)
-        tr = w.trial("rec 1", labels={"object": "box", "force_level": 3},
-                     annotations=[(0.0, 0.05, "press"), (0.05, 0.2, "slip")])
+        tr = w.trial(
+            "rec 1",
+            labels={"object": "box", "force_level": 3},
+            annotations=[(0.0, 0.05, "press"), (0.05, 0.2, "slip")],
+        )
         ev = tr.events(s)
         for i in range(0, n_events, 1234):
-            ev.append(x[i:i + 1234], y[i:i + 1234], t[i:i + 1234], p[i:i + 1234])
+            ev.append(x[i : i + 1234], y[i : i + 1234], t[i : i + 1234], p[i : i + 1234])
         ev.close()
-        acc = w.add_sensor("acc", kind="accelerometer", sample_rate_hz=100,
-                           channel_names=["ax", "ay"], channel_units=["g", "g"],
-                           channel_delays_s=[0.0, 0.005])
+        acc = w.add_sensor(
+            "acc",
+            kind="accelerometer",
+            sample_rate_hz=100,
+            channel_names=["ax", "ay"],
+            channel_units=["g", "g"],
+            channel_delays_s=[0.0, 0.005],
+        )
         tr2 = w.trial("rec 1", labels={"object": "wood"}, split="train")
-        tr2.write_signal("acc", sensor=acc, data=rng.normal(size=(50, 2)), t_s=np.arange(50) / 100,
-                         sample_labels={"motion": (np.arange(50) % 3, ["no_motion", "slide", "slip"])})
+        tr2.write_signal(
+            "acc",
+            sensor=acc,
+            data=rng.normal(size=(50, 2)),
+            t_s=np.arange(50) / 100,
+            sample_labels={"motion": (np.arange(50) % 3, ["no_motion", "slide", "slip"])},
+        )
         w.commit()
     return {"x": x, "y": y, "t": t, "p": p}
 
@@ -84,7 +100,9 @@ def test_failure_leaves_no_file_and_keeps_earlier_output(tmp_path):
     out.write_bytes(b"old")
     with pytest.raises(InputError, match=r"src\.csv, row 7: x = 99 is outside the sensor"):
         with StoreWriter(out, overwrite=True) as w:
-            s = w.add_sensor("dvs", kind="event_camera", sample_rate_hz=0, width_px=64, height_px=48)
+            s = w.add_sensor(
+                "dvs", kind="event_camera", sample_rate_hz=0, width_px=64, height_px=48
+            )
             ev = w.trial("t").events(s)
             x = np.zeros(10, dtype=np.int64)
             x[5] = 99
@@ -116,12 +134,24 @@ def test_event_checks_name_the_row(tmp_path):
     with StoreWriter(tmp_path / "a.h5") as w:
         s = w.add_sensor("dvs", kind="event_camera", sample_rate_hz=0, width_px=8, height_px=8)
         ev = w.trial("t").events(s)
-        ev.append(np.zeros(3), np.zeros(3), np.array([5, 6, 7]), np.ones(3), source="f.csv", first_row=2)
-        with pytest.raises(InputError, match=r"f\.csv, row 10: timestamp 6 us is earlier than the previous 7"):
-            ev.append(np.zeros(2), np.zeros(2), np.array([6, 8]), np.ones(2), source="f.csv", first_row=10)
+        ev.append(
+            np.zeros(3), np.zeros(3), np.array([5, 6, 7]), np.ones(3), source="f.csv", first_row=2
+        )
+        with pytest.raises(
+            InputError, match=r"f\.csv, row 10: timestamp 6 us is earlier than the previous 7"
+        ):
+            ev.append(
+                np.zeros(2), np.zeros(2), np.array([6, 8]), np.ones(2), source="f.csv", first_row=10
+            )
         with pytest.raises(InputError, match=r"row 4: polarity 0 is not -1/\+1"):
-            ev.append(np.zeros(2), np.zeros(2), np.array([8, 9]), np.array([1, 0]), source="f.csv",
-                      first_row=3)
+            ev.append(
+                np.zeros(2),
+                np.zeros(2),
+                np.array([8, 9]),
+                np.array([1, 0]),
+                source="f.csv",
+                first_row=3,
+            )
 
 
 def _corrupt(src, dst, edit):
@@ -134,27 +164,57 @@ def _corrupt(src, dst, edit):
 @pytest.mark.parametrize(
     ("edit", "path", "message"),
     [
-        (lambda h: h["trials/rec_1/events/p"].__setitem__(3, 0), "/trials/rec_1/events/p",
-         "values outside [-1, 1], first at index 3"),
-        (lambda h: h["trials/rec_1/events/y"].__setitem__(9, 48), "/trials/rec_1/events/y",
-         "values >= height_px of /sensors/dvs (48), first at index 9"),
-        (lambda h: h["trials/rec_1/events/t"].__setitem__(100, 0), "/trials/rec_1/events/t",
-         "time goes backwards at index 100"),
-        (lambda h: h["sensors/acc"].attrs.__setitem__("kind", "banana"), "/sensors/acc (attribute 'kind')",
-         "value 'banana' is not one of"),
-        (lambda h: h.__delitem__("trials/rec_1_2/labels"), "/trials/rec_1_2/labels",
-         "required group is missing"),
+        (
+            lambda h: h["trials/rec_1/events/p"].__setitem__(3, 0),
+            "/trials/rec_1/events/p",
+            "values outside [-1, 1], first at index 3",
+        ),
+        (
+            lambda h: h["trials/rec_1/events/y"].__setitem__(9, 48),
+            "/trials/rec_1/events/y",
+            "values >= height_px of /sensors/dvs (48), first at index 9",
+        ),
+        (
+            lambda h: h["trials/rec_1/events/t"].__setitem__(100, 0),
+            "/trials/rec_1/events/t",
+            "time goes backwards at index 100",
+        ),
+        (
+            lambda h: h["sensors/acc"].attrs.__setitem__("kind", "banana"),
+            "/sensors/acc (attribute 'kind')",
+            "value 'banana' is not one of",
+        ),
+        (
+            lambda h: h.__delitem__("trials/rec_1_2/labels"),
+            "/trials/rec_1_2/labels",
+            "required group is missing",
+        ),
         (lambda h: h.create_group("junk"), "/junk", "not part of the schema"),
-        (lambda h: h["sensors/dvs"].attrs.__delitem__("width_px"), "/sensors/dvs",
-         "missing attribute 'width_px'"),
-        (lambda h: h["trials/rec_1_2/signals/acc"].attrs.__setitem__("sensor", "nope"),
-         "/trials/rec_1_2/signals/acc (attribute 'sensor')", "refers to /sensors/nope, which does not exist"),
-        (lambda h: h["trials/rec_1"].attrs.__setitem__("split", "training"), "/trials/rec_1 (attribute 'split')",
-         "not one of"),
-        (lambda h: (
-            h.__delitem__("provenance/sources/sha256"),
-            h["provenance/sources"].create_dataset("sha256", data=["xyz"], dtype=h5py.string_dtype())),
-         "/provenance/sources/sha256", "does not match"),
+        (
+            lambda h: h["sensors/dvs"].attrs.__delitem__("width_px"),
+            "/sensors/dvs",
+            "missing attribute 'width_px'",
+        ),
+        (
+            lambda h: h["trials/rec_1_2/signals/acc"].attrs.__setitem__("sensor", "nope"),
+            "/trials/rec_1_2/signals/acc (attribute 'sensor')",
+            "refers to /sensors/nope, which does not exist",
+        ),
+        (
+            lambda h: h["trials/rec_1"].attrs.__setitem__("split", "training"),
+            "/trials/rec_1 (attribute 'split')",
+            "not one of",
+        ),
+        (
+            lambda h: (
+                h.__delitem__("provenance/sources/sha256"),
+                h["provenance/sources"].create_dataset(
+                    "sha256", data=["xyz"], dtype=h5py.string_dtype()
+                ),
+            ),
+            "/provenance/sources/sha256",
+            "does not match",
+        ),
     ],
 )
 def test_validator_reports_each_violation_with_its_path(tmp_path, edit, path, message):
@@ -178,15 +238,20 @@ def test_signal_column_and_length_checks(tmp_path):
 
     report = _corrupt(good, tmp_path / "bad.h5", edit)
     text = [str(v) for v in report.violations]
-    assert any("/trials/rec_1_2/signals/acc: datasets that must have equal length differ: data=50, t_s=49"
-               in v for v in text), text
+    assert any(
+        "/trials/rec_1_2/signals/acc: datasets that must have equal length differ: data=50, t_s=49"
+        in v
+        for v in text
+    ), text
     assert any("/sensors/acc: datasets that must have equal length differ" in v for v in text), text
 
 
 def test_version_rules(tmp_path):
     good = tmp_path / "good.h5"
     _write_small(good)
-    major = _corrupt(good, tmp_path / "major.h5", lambda h: h.attrs.__setitem__("schema_version", "2.0"))
+    major = _corrupt(
+        good, tmp_path / "major.h5", lambda h: h.attrs.__setitem__("schema_version", "2.0")
+    )
     assert not major.ok and "re-create the file" in major.violations[0].message
     with pytest.raises(SchemaError, match="cannot be read by this tool"):
         check_readable(tmp_path / "major.h5")
@@ -220,9 +285,65 @@ def test_derived_groups_need_their_own_provenance(tmp_path):
         g.create_dataset("anything/inside", data=[1, 2, 3])  # inner layout is the command's own
 
     assert _corrupt(good, tmp_path / "ok.h5", add_fits).ok
-    bad = _corrupt(good, tmp_path / "bad.h5",
-                   lambda h: h.create_group("derived/fits/no_provenance"))
-    assert {v.message for v in bad.violations} >= {"missing attribute 'command'",
-                                                   "missing attribute 'created_utc'"}
+    bad = _corrupt(
+        good, tmp_path / "bad.h5", lambda h: h.create_group("derived/fits/no_provenance")
+    )
+    assert {v.message for v in bad.violations} >= {
+        "missing attribute 'command'",
+        "missing attribute 'created_utc'",
+    }
     odd = _corrupt(good, tmp_path / "odd.h5", lambda h: h.create_group("derived/guesses"))
     assert any("is not one of" in v.message for v in odd.violations)
+
+
+def test_stale_temporaries_of_killed_writers_are_removed(tmp_path):
+    out = tmp_path / "a.h5"
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    stale = tmp_path / f".a.h5.tmp-{dead}"
+    stale.write_bytes(b"left by a killed writer")
+    live = tmp_path / f".a.h5.tmp-{os.getpid()}0"  # not a pid of ours; may or may not be alive
+    other = tmp_path / ".b.h5.tmp-1"
+    other.write_bytes(b"another output's")
+    with StoreWriter(out) as w:
+        assert not stale.exists()
+        w.add_sensor(
+            "acc", kind="accelerometer", sample_rate_hz=1, channel_names=["a"], channel_units="g"
+        )
+        w.trial("t")
+        w.commit()
+    assert other.exists() and not live.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".b.h5.tmp-1", "a.h5"]
+
+
+def test_verified_datasets_skip_only_value_scans(tmp_path):
+    good = tmp_path / "good.h5"
+    _write_small(good)
+
+    def edit(h):
+        h["trials/rec_1/events/p"][3] = 0
+        h["trials/rec_1/signals"] = 1  # structural problems are always reported
+
+    bad = tmp_path / "bad.h5"
+    _corrupt(good, bad, edit)
+    report = validate_file(bad, verified={"/trials/rec_1/events/p"})
+    assert [v.h5_path for v in report.violations] == ["/trials/rec_1/signals"]
+    assert any(v.h5_path == "/trials/rec_1/events/p" for v in validate_file(bad).violations)
+
+
+def test_trials_keep_input_order(tmp_path):
+    out = tmp_path / "a.h5"
+    with StoreWriter(out) as w:
+        s = w.add_sensor(
+            "acc", kind="accelerometer", sample_rate_hz=1, channel_names=["a"], channel_units="g"
+        )
+        for name in ["mat2_1", "mat10_1", "mat1_1"]:
+            w.trial(name).write_signal("x y", sensor=s, data=np.zeros((2, 1)), t_s=np.arange(2.0))
+        w.commit()
+    assert [t.name for t in summarize(out).trials] == ["mat2_1", "mat10_1", "mat1_1"]
+    with h5py.File(out) as h5:
+        assert list(h5["trials/mat2_1/signals"]) == ["x_y"]
