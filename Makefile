@@ -5,7 +5,7 @@
 #   make ingest RAW=dir OUT=dir [INGEST_FLAGS="--width 640 --height 480"]
 #                             one HDF5 file per raw recording; parallel under make -j;
 #                             outputs that are up to date are skipped
-#   make bench                run the benchmarks in benchmarks/
+#   make bench                run the benchmarks in benchmarks/ (figures: benchmarks/RESULTS.md)
 
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
@@ -58,6 +58,7 @@ demo: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py
+	$(BIN)/python benchmarks/fit_fos.py
 
 # ---- batch ingest: one output per input, atomic writes, up-to-date outputs skipped ----
 RAW ?= raw

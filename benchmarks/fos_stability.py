@@ -135,13 +135,15 @@ def plot(results: dict, path: Path) -> None:
                     label="second order chosen (AIC)")
             ax.plot(xs, [r["median_r"] or np.nan for r in rows], "^-", color="gray",
                     label="median Pearson R (FOS)")
+            ax.axhline(0.983138, color="gray", lw=0.8, ls="--", label="paper's press R 0.983")
         ax.axhline(0.95, color="k", lw=0.6)
         ax.axvline(BASELINE[axis] if BASELINE[axis] > 0 else 0.1, color="k", lw=0.6, ls=":")
         ax.set_xscale("log")
         ax.set_ylim(-0.03, 1.03)
         ax.set_xlabel(LABELS[axis] + (" (0 drawn at 0.1)" if axis == "saturation" else ""))
-        ax.set_title(f"{axis}: breaks at {results['breaking_points'][axis] or 'none'}",
-                     fontsize=10)
+        breaks = results["breaking_points"][axis]
+        text = ", ".join(f"{k} {v:.3g}" for k, v in breaks.items()) or "nowhere in range"
+        ax.set_title(f"{axis}: breaks {text}", fontsize=10)
         ax.legend(fontsize=7, loc="best")
     fig.suptitle("FOS pulse fit (eq. 16) stability, "
                  f"{results['meta']['trials']} trials per point", fontsize=11)

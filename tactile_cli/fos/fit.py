@@ -168,10 +168,13 @@ class FosFitResult:
         return len(self.status)
 
     def drop_failed(self) -> FosFitResult:
-        """A copy with the parameters and statistics of non-converged trials set to NaN."""
+        """A copy with the parameters and statistics of non-converged trials set to NaN
+        (a known duration, an input, is kept)."""
         bad = ~self.ok
         nan = {}
         for key in _FIT_FIELDS:
+            if key == "duration_s" and not self.duration_fitted:
+                continue
             v = getattr(self, key).copy()
             v[bad] = np.nan
             nan[key] = v
@@ -316,6 +319,38 @@ def _start(cfg: _Config, t: jax.Array, y: jax.Array, m: jax.Array, duration: jax
     return jnp.stack(shape)
 
 
+def _polish_shape(cfg: _Config, theta: jax.Array, args: tuple, n_iter: int = 3) -> jax.Array:
+    """A few Gauss-Newton steps in the shape coordinates with T held where the solver left it.
+
+    The pulse model has a kink in T at every sample time. Where the fitted T sits on one,
+    Levenberg-Marquardt's trust region collapses for all coordinates at once and can stop
+    with tau short of its optimum for that T; these steps finish tau (kept only if they
+    lower the residual).
+    """
+    n_shape = cfg.n_nonlinear - 1
+    fixed = replace(cfg, fit_duration=False)
+
+    def resid(shape_coords: jax.Array) -> jax.Array:
+        t, y, m, _, scale = args
+        return _residual(fixed, shape_coords, (t, y, m, jnp.exp(theta[n_shape]), scale))
+
+    coords = theta[:n_shape]
+    for _ in range(n_iter):
+        r, jac = resid(coords), jax.jacfwd(resid)(coords)
+        coords = coords - _solve_small(jac.T @ jac, jac.T @ r)
+    better = jnp.sum(resid(coords) ** 2) < jnp.sum(resid(theta[:n_shape]) ** 2)
+    polished = jnp.concatenate([coords, theta[n_shape:]])
+    return jnp.where(better & jnp.all(jnp.isfinite(coords)), polished, theta)
+
+
+def _solve_small(a: jax.Array, b: jax.Array) -> jax.Array:
+    """``a^-1 b`` for 1 x 1 and 2 x 2 ``a``, written out (no LAPACK call to compile)."""
+    if a.shape[0] == 1:
+        return b / a[0, 0]
+    det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    return jnp.stack([a[1, 1] * b[0] - a[0, 1] * b[1], a[0, 0] * b[1] - a[1, 0] * b[0]]) / det
+
+
 def _in_bounds(cfg: _Config, shape: jax.Array, lead: jax.Array, dur: jax.Array,
                bounds: jax.Array) -> jax.Array:
     lo, hi = bounds[0], bounds[1]
@@ -341,7 +376,8 @@ def _fit_one(cfg: _Config, t: jax.Array, y: jax.Array, m: jax.Array, duration: j
               else optx.GaussNewton)(rtol=cfg.rtol, atol=cfg.atol)
     sol = optx.least_squares(_solver_residual(cfg), solver, theta0, args=args,
                              max_steps=cfg.max_steps, throw=False)
-    shape, dur = _unpack(cfg, sol.value, duration)
+    theta = _polish_shape(cfg, sol.value, args) if cfg.fit_duration else sol.value
+    shape, dur = _unpack(cfg, theta, duration)
     basis = _basis(cfg, t, shape, dur)
     gains = _gains(basis, y, m)
     fit = basis @ gains
@@ -373,7 +409,7 @@ def _fit_one(cfg: _Config, t: jax.Array, y: jax.Array, m: jax.Array, duration: j
     stationary = jnp.all(jnp.abs(gn_step)
                          <= _STATIONARY_SE * se[:k] + 10 * cfg.rtol * jnp.abs(p_hat[:k]))
     start_cost = jnp.sum(_residual(cfg, theta_data, args) ** 2)
-    end_cost = jnp.sum(_residual(cfg, sol.value, args) ** 2)
+    end_cost = jnp.sum(_residual(cfg, theta, args) ** 2)
     not_worse = end_cost <= start_cost * (1 + 1e-9)
     identifiable = jnp.all(jnp.isfinite(se)) & (jnp.max(jnp.diag(gram_inv)) < _MAX_INFLATION)
     code = jnp.select(

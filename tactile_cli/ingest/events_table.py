@@ -101,11 +101,11 @@ def link_source(trial: TrialWriter, hashing: Future[int]) -> None:
     trial.group.attrs["source_index"] = np.asarray([hashing.result()], dtype=np.int64)
 
 
-def sensor_size(options: IngestOptions, what: str) -> tuple[int, int]:
+def sensor_size(options: IngestOptions, what: str, path: Path | None = None) -> tuple[int, int]:
     """(width, height) in px from ``--width``/``--height``, which ``what`` files lack."""
     if options.width_px is None or options.height_px is None:
         raise InputError(f"{what} files do not record the sensor size; pass --width and --height "
-                         "(pixels), e.g. --width 320 --height 240")
+                         "(pixels), e.g. --width 320 --height 240", path=path)
     for flag, value in (("--width", options.width_px), ("--height", options.height_px)):
         if value < 1 or value > 65536:
             raise InputError(f"{flag} (={value}) must be between 1 and 65536 px")
@@ -163,7 +163,7 @@ class PolarityConvention:
 def ingest_events_csv(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
                       progress: Progress) -> None:
     """Add one trial per CSV file of events (columns t, x, y, p; see the module docstring)."""
-    width, height = sensor_size(options, "event CSV")
+    width, height = sensor_size(options, "event CSV", inputs[0])
     sensor = event_sensor(writer, options.sensor_name or DEFAULT_SENSOR, width_px=width,
                           height_px=height, description="events from CSV (t us, x px, y px, p)")
     progress.start(sum(_regular_file(p).stat().st_size for p in inputs), "events CSV")
@@ -352,7 +352,7 @@ def _raise_first_bad_line(block: bytes, names: list[str], path: Path, first_line
 def ingest_events_npy(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
                       progress: Progress) -> None:
     """Add one trial per .npy structured array of events (fields t, x, y, p)."""
-    width, height = sensor_size(options, "event NPY")
+    width, height = sensor_size(options, "event NPY", inputs[0])
     sensor = event_sensor(writer, options.sensor_name or DEFAULT_SENSOR, width_px=width,
                           height_px=height, description="events from NPY (t us, x px, y px, p)")
     progress.start(sum(_regular_file(p).stat().st_size for p in inputs), "events NPY")

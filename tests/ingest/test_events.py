@@ -476,9 +476,9 @@ def test_cli_missing_geometry_and_unknown_format(tmp_path):
     write_events_csv(src, 10, width=W, height=H, seed=1)
     result = runner.invoke(app, ["ingest", str(src), "--out", str(tmp_path / "o.h5")])
     assert result.exit_code == 2
-    assert result.stderr.strip() == ("tactile: error: event CSV files do not record the sensor "
-                                     "size; pass --width and --height (pixels), e.g. --width "
-                                     "320 --height 240")
+    assert result.stderr.strip() == (f"tactile: error: {src}: event CSV files do not record the "
+                                     "sensor size; pass --width and --height (pixels), e.g. "
+                                     "--width 320 --height 240")
     result = runner.invoke(app, ["ingest", str(src), "--out", str(tmp_path / "o.h5"),
                                  "--format", "evt3"])
     assert result.exit_code == 2 and "unknown format 'evt3'" in result.stderr
