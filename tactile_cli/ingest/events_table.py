@@ -98,7 +98,7 @@ def link_source(trial: TrialWriter, hashing: Future[int]) -> None:
     The SHA-256 of a large input takes a second per ~1.3 GB; started in the pool when the
     file is opened, it runs while the file is parsed and compressed instead of before.
     """
-    trial.group.attrs["source_index"] = np.asarray([hashing.result()], dtype=np.int64)
+    trial.set_sources([hashing.result()])
 
 
 def sensor_size(options: IngestOptions, what: str, path: Path | None = None) -> tuple[int, int]:

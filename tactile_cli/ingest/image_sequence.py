@@ -363,7 +363,7 @@ def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw:
         sources.append(writer.add_source(folder.timestamps_file))
     # set after streaming: the writer's trial() takes sources up front, which would mean
     # hashing every frame before the first one is decoded
-    trial.group.attrs["source_index"] = np.asarray(sources, dtype=np.int64)
+    trial.set_sources(sources)
 
 
 __all__ = [

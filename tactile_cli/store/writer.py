@@ -334,7 +334,7 @@ class StoreWriter:
         group.attrs["split"] = split
         group.attrs["duration_s"] = 0.0
         if sources:
-            group.attrs["source_index"] = np.asarray(sources, dtype=np.int64)
+            group.attrs["source_index"] = np.asarray(sources, dtype=np.int64)  # see set_sources
         for key, value in extra_attrs.items():
             group.attrs[key] = value
         lab = group.create_group("labels")
@@ -369,6 +369,11 @@ class TrialWriter:
         self.group.attrs["duration_s"] = max(
             float(self.group.attrs["duration_s"]), float(duration_s)
         )
+
+    def set_sources(self, indices: Sequence[int]) -> None:
+        """Point the trial at its source files (indices returned by ``add_source``), for
+        readers that hash sources while they stream the data."""
+        self.group.attrs["source_index"] = np.asarray(indices, dtype=np.int64)
 
     def set_labels(self, **labels: str | int | float) -> None:
         for key, value in labels.items():
