@@ -44,6 +44,20 @@ def ingest_command(
             min=0.001, help="Frame rate of image folders without a timestamps.csv (default 30)."
         ),
     ] = None,
+    annotations: Annotated[
+        Path | None,
+        typer.Option(
+            help="CSV of time intervals per trial (columns trial,start_s,end_s,label), "
+            "stored as /trials/<trial>/annotations.",
+        ),
+    ] = None,
+    trial_labels: Annotated[
+        Path | None,
+        typer.Option(
+            help="CSV with a 'trial' column; every other column becomes a label of that "
+            "trial (numbers as numbers, empty cells skipped).",
+        ),
+    ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     compression: Annotated[
         int,
@@ -64,8 +78,10 @@ def ingest_command(
 
     Formats: AEDAT4 event files, event CSV (t,x,y,p) and NPY structured arrays, the
     accelerometer CSV tree (object/orientation/speed folders), any sensor CSV described by
-    a YAML mapping file, and image-sequence folders of visuotactile sensors. The output is
-    written to a temporary file and renamed into place only when complete and valid.
+    a YAML mapping file, and image-sequence folders of visuotactile sensors. Trials are
+    named after the input files (stems); --annotations and --trial-labels add ground truth
+    keyed by those names. The output is written to a temporary file and renamed into place
+    only when complete and valid.
     """
 
     def body() -> None:
@@ -77,6 +93,8 @@ def ingest_command(
             height_px=height,
             sensor_name=sensor,
             frame_rate_hz=fps,
+            annotations=annotations,
+            trial_labels=trial_labels,
         )
         with RichProgress(enabled=progress) as bar:
             path = ingest(

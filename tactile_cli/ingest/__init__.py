@@ -3,7 +3,8 @@
 Each format has its own module with one entry function
 ``ingest_<format>(inputs, writer, options, progress)`` that adds sensors and trials to a
 :class:`~tactile_cli.store.StoreWriter`. :func:`ingest` picks the format, opens the writer
-(temporary file, validation, atomic rename) and adds run-wide labels.
+(temporary file, validation, atomic rename), adds run-wide labels and then the ground-truth
+sidecars (``--annotations``, ``--trial-labels``; see :mod:`tactile_cli.ingest.sidecars`).
 """
 
 from __future__ import annotations
@@ -43,10 +44,14 @@ class IngestOptions:
     sensor_name: str | None = None
     chunk_events: int = 1 << 20  # events read per chunk while streaming
     frame_rate_hz: float | None = None  # image folders without timestamps.csv (default 30 Hz)
+    annotations: Path | None = None  # CSV trial,start_s,end_s,label (see ingest.sidecars)
+    trial_labels: Path | None = None  # CSV trial,<label>... (see ingest.sidecars)
 
     def as_config(self) -> dict[str, Any]:
         out = asdict(self)
-        out["mapping"] = None if self.mapping is None else str(self.mapping)
+        for key in ("mapping", "annotations", "trial_labels"):
+            value = getattr(self, key)
+            out[key] = None if value is None else str(value)
         return out
 
 
@@ -115,6 +120,12 @@ def ingest(
         if not path.exists():
             raise InputError("file not found", path=path)
     fmt = detect_format(paths, options)
+    # the sidecars are small: check them before the (possibly long) ingest of the data
+    from .sidecars import apply_sidecars, read_annotations, read_trial_labels
+
+    annotations = None if options.annotations is None else read_annotations(options.annotations)
+    trial_labels = (None if options.trial_labels is None
+                    else read_trial_labels(options.trial_labels))
     config = {
         "format": fmt,
         **options.as_config(),
@@ -134,6 +145,10 @@ def ingest(
             for group in trials.values():
                 for key, value in options.labels.items():
                     group["labels"].attrs[safe_name(key)] = value
+        apply_sidecars(trials, annotations=annotations, labels=trial_labels)
+        for sidecar in (options.annotations, options.trial_labels):
+            if sidecar is not None:
+                writer.add_source(sidecar)
         return writer.commit()
 
 

@@ -12,6 +12,7 @@ What is ingested and what is not:
   given, must agree with it);
 - the sensor is named after the camera (the ``source`` attribute of the stream, e.g.
   ``DVXplorer_DXB00010``) unless ``--sensor`` names it;
+- the trial's time 0 is its first event (events attribute ``t_origin_us``);
 - IMU, trigger and frame streams are ignored (their packets are skipped);
 - a file with several event streams is refused, since a trial holds one event stream.
 
@@ -114,7 +115,8 @@ def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
             if packet.get("stream_id") == stream.stream_id and "events" in packet:
                 gather.add(packet["events"])  # IMU, trigger and frame packets are skipped
     gather.flush()
-    if events.close() == 0:
+    # camera clocks count from an arbitrary epoch: the trial starts at its first event
+    if events.close(t_origin_us=events.t_first) == 0:
         raise InputError(f"event stream {stream.stream_id} holds no events", path=path)
 
 

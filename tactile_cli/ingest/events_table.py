@@ -20,6 +20,11 @@ and the line, where line 1 is the header):
   error. Stored polarity is always -1/+1 (0 becomes -1).
 - Timestamps must not decrease; pixels must lie inside the sensor.
 
+Time origin (events attribute ``t_origin_us``, the timestamp at the trial's time 0): 0 when
+the first timestamp is below 2**40 us (times relative to the trial start, as ``tactile
+simulate marker-events`` writes them), else the first timestamp (epoch times); see
+:func:`~tactile_cli.store.writer.event_time_origin_us`.
+
 NPY rules: a 1-D structured array with integer fields ``t``, ``x``, ``y``, ``p`` (``p`` may be
 bool); missing or extra fields are errors. A plain 2-D (n, 4) array is refused, because
 its column order would be a guess. Error locations are 0-based array indices

@@ -528,6 +528,18 @@ class FrameAppender:
         return self.n
 
 
+#: Timestamps below this (2**40 us, about 12.7 days) are taken as relative to the trial
+#: start; later ones as a clock with an epoch (camera or Unix time).
+RELATIVE_TIME_LIMIT_US = 1 << 40
+
+
+def event_time_origin_us(t_first_us: int) -> int:
+    """The event timestamp at a trial's time 0, from its first event: 0 when that is below
+    :data:`RELATIVE_TIME_LIMIT_US` (the times are already relative to the trial start),
+    else the first timestamp itself (epoch times: the trial starts at its first event)."""
+    return 0 if 0 <= t_first_us < RELATIVE_TIME_LIMIT_US else int(t_first_us)
+
+
 class EventAppender:
     """Append address events in chunks, checking them as they arrive.
 
@@ -782,9 +794,14 @@ class EventAppender:
                 cls._pool_pid = os.getpid()
             return cls._pool
 
-    def close(self) -> int:
-        """Write the last chunk, the millisecond index and the trial duration; returns the
-        event count."""
+    def close(self, *, t_origin_us: int | None = None) -> int:
+        """Write the last chunk, the millisecond index, the time origin and the trial
+        duration; returns the event count.
+
+        ``t_origin_us`` is the event timestamp at the trial's time 0 (attribute
+        ``t_origin_us``); ``None`` applies :func:`event_time_origin_us` to the first event.
+        The duration runs from the earlier of the origin and the first event to the last.
+        """
         if self._fill:
             for name, _ in self._COLUMNS:
                 self._stage[name][self._fill :] = 0  # HDF5's fill value, as its own filter pads
@@ -799,5 +816,7 @@ class EventAppender:
         self.trial.store.verified.update(f"{self.group.name}/{c}" for c in ("x", "y", "t", "p"))
         self.group.attrs["ms_index_origin_us"] = np.int64(self.t_first or 0)
         if self.t_first is not None and self.t_last is not None:
-            self.trial._extend_duration((self.t_last - self.t_first) * 1e-6)
+            origin = event_time_origin_us(self.t_first) if t_origin_us is None else t_origin_us
+            self.group.attrs["t_origin_us"] = np.int64(origin)
+            self.trial._extend_duration((self.t_last - min(origin, self.t_first)) * 1e-6)
         return self.n

@@ -1,0 +1,238 @@
+"""Ground truth beside the recordings: ``--annotations FILE.csv`` and ``--trial-labels FILE.csv``.
+
+Both are small CSV files (UTF-8, a header line, comma-separated, standard CSV quoting)
+keyed by trial name: the name the trial gets in the output file (the input's file stem,
+sanitised as :func:`~tactile_cli.store.writer.safe_name` does). They are read and checked
+before any recording is, and applied after the format reader ran:
+
+- annotations: columns exactly ``trial, start_s, end_s, label`` (any order). Each row is
+  one time interval in seconds from the trial's time origin: finite numbers with
+  ``start_s <= end_s`` and a non-empty label. A trial's rows become
+  ``/trials/<trial>/annotations`` in file order; a trial without rows gets none.
+- trial labels: a ``trial`` column plus any others; each other column becomes a label
+  attribute of that trial (``/trials/<trial>/labels``), numbers stored as numbers (int when
+  written as an integer, else float), text as text; empty cells are skipped. A trial has at
+  most one row. A label that a reader or ``--label`` already set must agree.
+
+Every broken rule is an :class:`~tactile_cli.errors.InputError` naming the file and the
+line (line 1 is the header), including a row whose trial is not among the ingested trials.
+Blank lines at the end of a file are ignored; elsewhere they are errors.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+from ..store.writer import safe_name
+
+ANNOTATION_COLUMNS = ("trial", "start_s", "end_s", "label")
+_INT = re.compile(r"[+-]?\d+")
+_FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_STR = h5py.string_dtype("utf-8")
+
+
+@dataclass(frozen=True)
+class Annotations:
+    """Parsed annotations: trial -> [(start_s, end_s, label, line)] in file order."""
+
+    path: Path
+    rows: dict[str, list[tuple[float, float, str, int]]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class TrialLabels:
+    """Parsed trial labels: trial -> ({label: value}, line)."""
+
+    path: Path
+    rows: dict[str, tuple[dict[str, str | int | float], int]] = field(default_factory=dict)
+
+
+def _rows(path: Path, what: str) -> Iterator[tuple[int, list[str]]]:
+    """``(line, cells)`` of every line of a CSV file, the header first (line 1)."""
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError(f"{what} file not found", path=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the {what} file ({exc.__class__.__name__}: {exc}); "
+                         "save it as UTF-8 CSV", path=path) from None
+    lines = text.rstrip("\r\n \t").splitlines()
+    if not lines or not lines[0].strip():
+        raise InputError(f"{what} file is empty; expected a header line", path=path)
+    reader = csv.reader(lines, strict=True)
+    try:
+        for cells in reader:
+            yield reader.line_num, cells
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV ({exc})", path=path,
+                         where=f"line {reader.line_num}") from None
+
+
+def _header(path: Path, cells: list[str]) -> list[str]:
+    names = [c.strip() for c in cells]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError(f"column{'s' if len(dup) > 1 else ''} {', '.join(map(repr, dup))} "
+                         "named twice in the header", path=path, where="line 1")
+    if "" in names:
+        raise InputError(f"column {names.index('') + 1} of the header has no name", path=path,
+                         where="line 1")
+    return names
+
+
+def _check_width(path: Path, line: int, cells: list[str], names: list[str]) -> None:
+    if not cells:
+        raise InputError("empty line; remove it", path=path, where=f"line {line}")
+    if len(cells) != len(names):
+        raise InputError(f"{len(cells)} fields, expected {len(names)} ({', '.join(names)})",
+                         path=path, where=f"line {line}")
+
+
+def read_annotations(path: str | Path) -> Annotations:
+    """Parse an annotations CSV (see the module docstring); raises InputError."""
+    path = Path(path)
+    rows: dict[str, list[tuple[float, float, str, int]]] = {}
+    names: list[str] = []
+    for line, cells in _rows(path, "annotations"):
+        if line == 1:
+            names = _header(path, cells)
+            missing = [c for c in ANNOTATION_COLUMNS if c not in names]
+            extra = [c for c in names if c not in ANNOTATION_COLUMNS]
+            if missing or extra:
+                problem = (f"missing column{'s' if len(missing) > 1 else ''} "
+                           f"{', '.join(map(repr, missing))}" if missing else
+                           f"unexpected column{'s' if len(extra) > 1 else ''} "
+                           f"{', '.join(map(repr, extra))}")
+                raise InputError(f"{problem}; an annotations file has exactly the columns "
+                                 "trial, start_s, end_s, label", path=path, where="line 1")
+            continue
+        _check_width(path, line, cells, names)
+        row = dict(zip(names, (c.strip() for c in cells), strict=True))
+        trial = _trial(path, line, row["trial"])
+        times = []
+        for key in ("start_s", "end_s"):
+            try:
+                value = float(row[key])
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise InputError(f"{key} {row[key]!r} is not a finite number of seconds",
+                                 path=path, where=f"line {line}")
+            times.append(value)
+        if times[0] > times[1]:
+            raise InputError(f"start_s {row['start_s']} is after end_s {row['end_s']}",
+                             path=path, where=f"line {line}")
+        if not row["label"]:
+            raise InputError("empty label", path=path, where=f"line {line}")
+        rows.setdefault(trial, []).append((times[0], times[1], row["label"], line))
+    return Annotations(path, rows)
+
+
+def read_trial_labels(path: str | Path) -> TrialLabels:
+    """Parse a trial-labels CSV (see the module docstring); raises InputError."""
+    path = Path(path)
+    rows: dict[str, tuple[dict[str, str | int | float], int]] = {}
+    names: list[str] = []
+    for line, cells in _rows(path, "trial labels"):
+        if line == 1:
+            names = _header(path, cells)
+            if "trial" not in names:
+                raise InputError(f"no 'trial' column; the header names {names}", path=path,
+                                 where="line 1")
+            if len(names) == 1:
+                raise InputError("only a 'trial' column; add one column per label", path=path,
+                                 where="line 1")
+            keys = [safe_name(n) for n in names if n != "trial"]
+            clash = sorted({k for k in keys if keys.count(k) > 1})
+            if clash:
+                raise InputError(f"columns map to the same label name {clash[0]!r} (label "
+                                 "names keep letters, digits, _ . - only); rename them",
+                                 path=path, where="line 1")
+            continue
+        _check_width(path, line, cells, names)
+        row = dict(zip(names, cells, strict=True))
+        trial = _trial(path, line, row.pop("trial").strip())
+        if trial in rows:
+            raise InputError(f"trial {trial!r} has a second row (the first is line "
+                             f"{rows[trial][1]})", path=path, where=f"line {line}")
+        labels = {safe_name(k): number_or_text(v) for k, v in row.items() if v.strip() != ""}
+        rows[trial] = (labels, line)
+    return TrialLabels(path, rows)
+
+
+def number_or_text(cell: str) -> str | int | float:
+    """``"12"`` -> 12, ``"0.5"``/``"1e-3"`` -> float, anything else (``"nan"``, ``"yes"``,
+    ``"small medium"``) -> the text, stripped of surrounding spaces."""
+    text = cell.strip()
+    if _INT.fullmatch(text):
+        value = int(text)
+        if -(2**63) <= value < 2**63:
+            return value
+    if _FLOAT.fullmatch(text):
+        return float(text)
+    return text
+
+
+def _trial(path: Path, line: int, name: str) -> str:
+    if not name:
+        raise InputError("empty trial name", path=path, where=f"line {line}")
+    return safe_name(name)
+
+
+def apply_sidecars(trials: h5py.Group, *, annotations: Annotations | None = None,
+                   labels: TrialLabels | None = None) -> None:
+    """Write parsed sidecars into the ``/trials`` group of a file being written.
+
+    Raises InputError naming the file and line of a row whose trial is not in ``trials``,
+    of a trial that already has annotations, or of a label that contradicts one already set.
+    """
+    have = set(trials.keys())
+
+    def unknown(path: Path, trial: str, line: int) -> InputError:
+        shown = ", ".join(sorted(have)[:8]) + (" ..." if len(have) > 8 else "")
+        return InputError(f"trial {trial!r} is not among the ingested trials ({shown}); "
+                          "trial names are the input file stems", path=path,
+                          where=f"line {line}")
+
+    if annotations is not None:
+        for trial, rows in annotations.rows.items():
+            if trial not in have:
+                raise unknown(annotations.path, trial, rows[0][3])
+            group = trials[trial]
+            if "annotations" in group:
+                raise InputError(f"trial {trial!r} already has annotations from its input; "
+                                 "leave out --annotations", path=annotations.path,
+                                 where=f"line {rows[0][3]}")
+            ann = group.create_group("annotations")
+            ann.create_dataset("start_s", data=np.array([r[0] for r in rows], dtype=np.float64))
+            ann.create_dataset("end_s", data=np.array([r[1] for r in rows], dtype=np.float64))
+            ann.create_dataset("label", data=np.array([r[2] for r in rows], dtype=object),
+                               dtype=_STR)
+    if labels is not None:
+        for trial, (values, line) in labels.rows.items():
+            if trial not in have:
+                raise unknown(labels.path, trial, line)
+            attrs = trials[trial]["labels"].attrs
+            for key, value in values.items():
+                if key in attrs:
+                    old = attrs[key]
+                    old = old.decode() if isinstance(old, bytes) else (
+                        old.item() if isinstance(old, np.generic) else old)
+                    if old != value:
+                        raise InputError(f"label {key!r} = {value!r} contradicts {old!r} set "
+                                         "by the input or --label", path=labels.path,
+                                         where=f"line {line}")
+                attrs[key] = value
+
+
+__all__ = ["Annotations", "TrialLabels", "read_annotations", "read_trial_labels",
+           "apply_sidecars", "number_or_text"]
