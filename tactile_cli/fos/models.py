@@ -34,8 +34,8 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-import jax
-import jax.numpy as jnp
+import sys
+
 import numpy as np
 
 Kind = Literal["step", "pulse", "ramp"]
@@ -44,8 +44,17 @@ KINDS: tuple[str, ...] = ("step", "pulse", "ramp")
 
 
 def _xp(*arrays: Any) -> Any:
-    """jax.numpy if any argument is a jax array or tracer, else numpy."""
-    return jnp if any(isinstance(a, jax.Array) for a in arrays) else np
+    """jax.numpy if any argument is a jax array or tracer, else numpy.
+
+    jax is not imported here: an argument can only be a jax array if the caller imported
+    jax already, so numpy-only users (the scene, synth) do not pay jax's import time.
+    """
+    jax = sys.modules.get("jax")
+    if jax is not None and any(isinstance(a, jax.Array) for a in arrays):
+        import jax.numpy as jnp
+
+        return jnp
+    return np
 
 
 def unit_response(kind: Kind, t_s: Any, tau_s: Any, duration_s: Any = None) -> Any:
