@@ -1,0 +1,150 @@
+"""`tactile accumulate FILE`"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from ..errors import InputError
+from ._errors import run_guarded
+from .progress import RichProgress
+
+
+def _fmt_s(value: float | None) -> str:
+    return "" if value is None or not math.isfinite(value) else f"{value:.3f}"
+
+
+def accumulate_command(
+    file: Annotated[
+        Path, typer.Argument(help="A tactile HDF5 file with event trials.", show_default=False)
+    ],
+    trial: Annotated[
+        list[str] | None,
+        typer.Option("--trial", "-t", help="Trial to accumulate; repeatable (default: every "
+                     "trial with events).", show_default=False),
+    ] = None,
+    bin_ms: Annotated[
+        float, typer.Option("--bin-ms", min=0.001, help="Bin width in ms (paper: 20).")
+    ] = 20.0,
+    smooth: Annotated[
+        int, typer.Option("--smooth", min=1, help="Moving-average window in bins (odd).")
+    ] = 5,
+    segment: Annotated[
+        bool, typer.Option("--segment", help="Find the approach/press/slip/release regions.")
+    ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON.")] = False,
+    csv_out: Annotated[
+        Path | None,
+        typer.Option("--csv", help="Write one row per bin (counts, smoothed net, actions).",
+                     show_default=False),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="Write the count streams to a new HDF5 file.",
+                     show_default=False),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option("--plot", help="Folder for one Fig. 10-style PNG per trial (created).",
+                     show_default=False),
+    ] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace existing --out/--csv files.")] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress",
+                     help="Show a progress bar (default: when stderr is a terminal).",
+                     show_default=False),
+    ] = None,
+) -> None:
+    """Count events per polarity in fixed bins (20 ms), smooth the net count and, with
+    --segment, find each trial's approach, press, slip and release regions (paper 000,
+    sec. 4.2, Fig. 10). Prints one row per trial; with annotations in the file, the share
+    of bins whose detected action matches them.
+    """
+
+    def body() -> None:
+        # imported here: the library pulls in the FOS package, which `tactile --help` skips
+        from ..events.recording import accumulate_file, write_bins_csv, write_counts
+        from ..store.writer import current_command
+
+        if smooth % 2 == 0:
+            raise InputError(f"--smooth {smooth} must be odd (a centred moving average); "
+                             f"use {smooth + 1}")
+        if plot is not None and plot.exists() and not plot.is_dir():
+            raise InputError("--plot must be a folder, not a file", path=plot)
+        for target, flag in ((out, "--out"), (csv_out, "--csv")):
+            if target is not None and target.exists() and not overwrite:
+                raise InputError(f"{flag} output exists; pass --overwrite to replace it",
+                                 path=target)
+        with RichProgress(enabled=progress) as bar:
+            run = accumulate_file(file, trials=trial or None, bin_s=bin_ms / 1000.0,
+                                  smooth_bins=smooth, segment=segment, progress=bar)
+            if plot is not None:
+                from ..events.figure import plot_trial
+
+                plot.mkdir(parents=True, exist_ok=True)
+                bar.start(len(run.trials), "plotting trials")
+                for acc in run.trials:
+                    plot_trial(acc, plot)
+                    bar.advance(1)
+                bar.finish()
+        config = {"file": str(file), "trials": trial or None, "bin_s": bin_ms / 1000.0,
+                  "smooth_bins": smooth, "segment": segment}
+        written = []
+        if out is not None:
+            written.append(write_counts(run, out, command=current_command(), config=config,
+                                        overwrite=overwrite))
+        if csv_out is not None:
+            written.append(write_bins_csv(run, csv_out, overwrite=overwrite))
+        if as_json:
+            data = run.as_dict()
+            data["written"] = [str(p) for p in written]
+            typer.echo(json.dumps(data, indent=2, allow_nan=False))
+            return
+        console = Console(width=None if sys.stdout.isatty() else 160)
+        table = Table(title=f"{file}: {bin_ms:g} ms bins, moving average of {smooth}")
+        columns = ["trial", "bins", "events", "positive", "negative", "outside"]
+        if segment:
+            columns += ["status", "press (s)", "slip (s)", "release (s)", "bins as annotated"]
+        for col in columns:
+            table.add_column(col, justify="left" if col in ("trial", "status") else "right")
+        for acc in run.trials:
+            c = acc.counts
+            row = [acc.trial, str(c.n_bins), f"{c.n_events:,}", f"{int(c.positive.sum()):,}",
+                   f"{int(c.negative.sum()):,}", f"{c.n_outside:,}"]
+            if segment and acc.segmentation is not None:
+                seg = acc.segmentation
+                score = acc.score
+                row += [seg.status, _fmt_s(seg.press_start_s), _fmt_s(seg.slip_start_s),
+                        _fmt_s(seg.release_start_s),
+                        "" if score is None else f"{100 * score.bin_accuracy:.1f} %"]
+            table.add_row(*row)
+        console.print(table)
+        summary = run.summary()
+        if run.skipped:
+            console.print(f"skipped {len(run.skipped)} trial(s) without events")
+        if segment:
+            statuses = ", ".join(f"{k} {v}" for k, v in sorted(summary["segmentation_status"]
+                                                                .items()))
+            line = f"segmentation: {statuses}"
+            if summary["mean_bin_accuracy"] is not None:
+                line += (f"; bins as annotated: mean {100 * summary['mean_bin_accuracy']:.2f} %,"
+                         f" lowest {100 * summary['min_bin_accuracy']:.2f} %")
+            console.print(line)
+            for acc in run.trials:
+                if acc.segmentation is not None and acc.segmentation.message:
+                    console.print(f"  {acc.trial}: {acc.segmentation.status}: "
+                                  f"{acc.segmentation.message}", highlight=False)
+        for path in written:
+            console.print(f"wrote {path}", highlight=False)
+        if plot is not None:
+            console.print(f"wrote {len(run.trials)} figure(s) to {plot}", highlight=False)
+
+    run_guarded(body)

@@ -1,0 +1,357 @@
+"""Accumulate (and segment) every trial of a tactile HDF5 file; write the count streams.
+
+The library side of ``tactile accumulate``: :func:`accumulate_file` turns each trial's
+events into :class:`~tactile_cli.events.accumulate.EventCounts`, smooths the net count,
+optionally segments it (:func:`~tactile_cli.events.segment.segment_actions`) and scores the
+segmentation against the trial's annotations; :func:`write_counts` stores the counts as
+``/trials/{trial}/signals/event_counts`` streams (data contract 3 of the toolkit: channels
+positive, negative, net in events/bin, ``t_s`` bin centres, ``sample_labels/action``);
+:func:`bin_rows` flattens them for a CSV.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+from ..fos.actions import ACTIONS, BIN_S
+from ..progress import NullProgress, Progress
+from ..store.validate import check_readable
+from ..store.writer import StoreWriter
+from .accumulate import (
+    CHANNELS,
+    EventCounts,
+    bin_us_of,
+    counts_to_labels,
+    moving_average,
+    read_annotations,
+    trial_counts,
+    unknown_trial,
+)
+from .segment import Segmentation, SegmentationScore, segment_actions, segmentation_accuracy
+
+#: Name of the count streams (and of their sensor when the source has one event sensor).
+STREAM = "event_counts"
+
+
+@dataclass
+class TrialAccumulation:
+    """Counts, smoothing and segmentation of one trial.
+
+    smoothed: (n_bins,) float64 centred moving average of the net count over
+    ``smooth_bins`` bins.
+    true_labels: (n_bins,) int8 action per bin from the trial's annotations (None when the
+    trial has no action annotations). segmentation / score: None unless segmenting
+    (score also needs annotations).
+    """
+
+    trial: str
+    sensor: str
+    counts: EventCounts
+    smoothed: np.ndarray
+    smooth_bins: int
+    labels: dict[str, Any]
+    split: str
+    annotations: list[tuple[float, float, str]]
+    true_labels: np.ndarray | None
+    segmentation: Segmentation | None = None
+    score: SegmentationScore | None = None
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready per-trial summary (no per-bin arrays)."""
+        c = self.counts
+        out: dict[str, Any] = {
+            "trial": self.trial,
+            "n_bins": c.n_bins,
+            "duration_s": c.end_s,
+            "n_events": c.n_events,
+            "n_positive": int(c.positive.sum()),
+            "n_negative": int(c.negative.sum()),
+            "n_outside": c.n_outside,
+            "t_origin_us": c.start_us,
+            "peak_net": int(c.net.max()) if c.n_bins else None,
+            "annotated": self.true_labels is not None,
+            "labels": self.labels,
+        }
+        if self.segmentation is not None:
+            out["segmentation"] = self.segmentation.as_dict()
+        if self.score is not None:
+            out["bin_accuracy"] = _finite(self.score.bin_accuracy)
+            out["boundary_errors_s"] = dict(zip(
+                ("press", "slip", "release"),
+                (_finite(float(e)) for e in self.score.boundary_errors_s), strict=True))
+        return out
+
+
+@dataclass
+class FileAccumulation:
+    """Every accumulated trial of one file, with the settings used."""
+
+    path: Path
+    bin_s: float
+    smooth_bins: int
+    segmented: bool
+    trials: list[TrialAccumulation] = field(default_factory=list)
+    sensors: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> (w, h) px
+    skipped: list[str] = field(default_factory=list)  # trials without events (not named)
+
+    def summary(self) -> dict[str, Any]:
+        scores = [t.score.bin_accuracy for t in self.trials
+                  if t.score is not None and math.isfinite(t.score.bin_accuracy)]
+        statuses: dict[str, int] = {}
+        for t in self.trials:
+            if t.segmentation is not None:
+                statuses[t.segmentation.status] = statuses.get(t.segmentation.status, 0) + 1
+        return {
+            "n_trials": len(self.trials),
+            "n_skipped_without_events": len(self.skipped),
+            "segmentation_status": statuses,
+            "mean_bin_accuracy": float(np.mean(scores)) if scores else None,
+            "min_bin_accuracy": float(np.min(scores)) if scores else None,
+        }
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready results (non-finite numbers become None)."""
+        return _json_safe({
+            "file": str(self.path),
+            "bin_s": self.bin_s,
+            "smooth_bins": self.smooth_bins,
+            "segment": self.segmented,
+            "trials": [t.summary() for t in self.trials],
+            "skipped": self.skipped,
+            "summary": self.summary(),
+        })
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value
+
+
+def _select_trials(h5: h5py.File, path: Path, trials: Sequence[str] | None
+                   ) -> tuple[list[str], list[str]]:
+    """(trials to accumulate, trials skipped for having no events)."""
+    names = list(h5["trials"].keys())
+    if trials:
+        missing = [t for t in trials if t not in h5["trials"]]
+        if missing:
+            raise unknown_trial(path, missing[0], names)
+        return list(dict.fromkeys(trials)), []
+    with_events = [n for n in names if "events" in h5["trials"][n]
+                   and h5["trials"][n]["events"]["t"].shape[0] > 0]
+    if not with_events:
+        raise InputError("no trial has events (event counts need an event-camera recording)",
+                         path=path)
+    return with_events, [n for n in names if n not in with_events]
+
+
+def accumulate_file(
+    path: str | Path,
+    *,
+    trials: Sequence[str] | None = None,
+    bin_s: float = BIN_S,
+    smooth_bins: int = 5,
+    segment: bool = False,
+    progress: Progress | None = None,
+) -> FileAccumulation:
+    """Event counts of the named trials of a tactile file (all trials with events when
+    ``trials`` is empty), their moving average of ``smooth_bins`` (odd) bins and, with
+    ``segment``, their action segmentation scored against the annotations.
+
+    Raises :class:`InputError` for a file that is not a tactile file, an unknown trial, a
+    named trial without events, or a bin width that is not a whole number of microseconds.
+    """
+    path = Path(path)
+    progress = progress or NullProgress()
+    try:
+        bin_us_of(bin_s)
+    except ValueError:
+        raise InputError(f"bin width {bin_s * 1e3:g} ms is not a whole number of "
+                         "microseconds; pass e.g. --bin-ms 20") from None
+    if smooth_bins < 1 or smooth_bins % 2 == 0:
+        raise InputError(f"smoothing window {smooth_bins} bins must be odd and >= 1 (a "
+                         "centred moving average); pass e.g. --smooth 5")
+    if not path.is_file():
+        raise InputError("file not found", path=path)
+    try:
+        check_readable(path)
+        h5 = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+    with h5:
+        names, skipped = _select_trials(h5, path, trials)
+        meta = {}
+        for name in names:
+            group = h5["trials"][name]
+            sensor = ""
+            if "events" in group:
+                sensor = _plain(group["events"].attrs["sensor"])
+            meta[name] = (
+                sensor,
+                {k: _plain(v) for k, v in group["labels"].attrs.items()},
+                _plain(group.attrs.get("split", "")),
+            )
+        sensors = {}
+        for sensor, _, _ in meta.values():
+            if sensor and sensor in h5["sensors"]:
+                attrs = h5["sensors"][sensor].attrs
+                sensors[sensor] = (int(attrs["width_px"]), int(attrs["height_px"]))
+    run = FileAccumulation(path, float(bin_s), int(smooth_bins), segment, sensors=sensors,
+                           skipped=skipped)
+    progress.start(len(names), "accumulating trials")
+    for name in names:
+        sensor, labels, split = meta[name]
+        counts = trial_counts(path, name, bin_s=bin_s)
+        annotations = read_annotations(path, name)
+        truth = counts_to_labels(counts.t_s, annotations)
+        acc = TrialAccumulation(
+            trial=name, sensor=sensor, counts=counts,
+            smoothed=moving_average(counts.net, smooth_bins), smooth_bins=smooth_bins,
+            labels=labels, split=split,
+            annotations=annotations, true_labels=truth if (truth >= 0).any() else None,
+        )
+        if segment:
+            acc.segmentation = segment_actions(counts.net, bin_s=bin_s, smooth_bins=smooth_bins)
+            if acc.true_labels is not None:
+                acc.score = segmentation_accuracy(acc.segmentation.labels, acc.true_labels,
+                                                  bin_s=bin_s)
+        run.trials.append(acc)
+        progress.advance(1)
+    progress.finish()
+    return run
+
+
+def write_counts(
+    run: FileAccumulation,
+    out: str | Path,
+    *,
+    command: str | None = None,
+    config: dict[str, Any] | None = None,
+    overwrite: bool = False,
+) -> Path:
+    """Write the count streams of ``run`` into a new schema-valid tactile file ``out``.
+
+    One sensor ``event_counts`` (``event_counts_<source sensor>`` when the source has
+    several event sensors) of kind event_camera with the source sensor's size, channels
+    positive/negative/net in events/bin, ``sample_rate_hz = 1/bin_s`` and attribute
+    ``bin_s``. Per trial: the labels, split and annotations of the source, the stream
+    ``signals/event_counts`` with ``sample_labels/action`` (from the annotations, else from
+    a successful segmentation) and ``sample_labels/action_detected`` (the segmentation,
+    when it did not fail); segmentation results as stream attributes. The source file is
+    recorded in the provenance.
+    """
+    sensor_names = {s: STREAM if len(run.sensors) <= 1 else f"{STREAM}_{s}" for s in run.sensors}
+    with StoreWriter(out, command=command, config=config, overwrite=overwrite) as w:
+        source = w.add_source(run.path)
+        for src, (width, height) in run.sensors.items():
+            w.add_sensor(
+                sensor_names[src], kind="event_camera", sample_rate_hz=1.0 / run.bin_s,
+                channel_names=list(CHANNELS), channel_units="events/bin",
+                width_px=width, height_px=height, bin_s=run.bin_s, source_sensor=src,
+                description=f"events of {src} accumulated in {run.bin_s * 1e3:g} ms bins",
+            )
+        for acc in run.trials:
+            trial = w.trial(acc.trial, labels=acc.labels, split=acc.split, sources=[source],
+                            annotations=acc.annotations, duration_s=acc.counts.end_s)
+            seg = acc.segmentation
+            sample_labels: dict[str, tuple[np.ndarray, Sequence[str] | None]] = {}
+            detected = seg.labels if seg is not None and seg.status != "failed" else None
+            action = acc.true_labels if acc.true_labels is not None else detected
+            if action is not None:
+                sample_labels["action"] = (action.astype(np.int8), ACTIONS)
+            if detected is not None:
+                sample_labels["action_detected"] = (detected.astype(np.int8), ACTIONS)
+            group = trial.write_signal(
+                STREAM, sensor=sensor_names[acc.sensor], data=acc.counts.stack(),
+                t_s=acc.counts.t_s, sample_labels=sample_labels,
+            )
+            group.attrs["t_origin_us"] = np.int64(acc.counts.start_us)
+            group.attrs["n_outside_events"] = np.int64(acc.counts.n_outside)
+            group.attrs["action_source"] = (
+                "annotations" if acc.true_labels is not None
+                else "segmentation" if detected is not None else "none")
+            if seg is not None:
+                group.attrs["segmentation_status"] = seg.status
+                group.attrs["segmentation_message"] = seg.message
+                for key in ("press_start_s", "slip_start_s", "release_start_s"):
+                    group.attrs[key] = float(getattr(seg, key))
+        return w.commit()
+
+
+def bin_rows(run: FileAccumulation) -> list[dict[str, Any]]:
+    """One row per bin of every trial (for a CSV): trial, t_s, positive, negative, net,
+    net_smoothed, action (annotated, "" when none) and action_detected (when segmented)."""
+    rows = []
+    for acc in run.trials:
+        c = acc.counts
+        truth = acc.true_labels
+        detected = (acc.segmentation.labels if acc.segmentation is not None
+                    and acc.segmentation.status != "failed" else None)
+        for k in range(c.n_bins):
+            row: dict[str, Any] = {
+                "trial": acc.trial, "t_s": round(float(c.t_s[k]), 9),
+                "positive": int(c.positive[k]), "negative": int(c.negative[k]),
+                "net": int(c.net[k]), "net_smoothed": round(float(acc.smoothed[k]), 6),
+                "action": ACTIONS[truth[k]] if truth is not None and truth[k] >= 0 else "",
+            }
+            if run.segmented:
+                row["action_detected"] = (ACTIONS[detected[k]] if detected is not None
+                                          and detected[k] >= 0 else "")
+            rows.append(row)
+    return rows
+
+
+def write_bins_csv(run: FileAccumulation, out: str | Path, *, overwrite: bool = False) -> Path:
+    """Write :func:`bin_rows` to a CSV file (temporary file, then an atomic rename)."""
+    out = Path(out)
+    if out.exists() and not overwrite:
+        raise InputError("output exists; pass --overwrite to replace it", path=out)
+    if not out.parent.is_dir():
+        raise InputError("output folder does not exist", path=out.parent)
+    rows = bin_rows(run)
+    fields = ["trial", "t_s", "positive", "negative", "net", "net_smoothed", "action"]
+    if run.segmented:
+        fields.append("action_detected")
+    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
+    try:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(rows)
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return out
+
+
+__all__ = ["STREAM", "FileAccumulation", "TrialAccumulation", "accumulate_file", "bin_rows",
+           "write_bins_csv", "write_counts"]
+
