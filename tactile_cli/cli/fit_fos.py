@@ -1,0 +1,297 @@
+"""`tactile fit-fos FILE`"""
+
+from __future__ import annotations
+
+import enum
+import json
+import os
+import sys
+from collections import Counter
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from ..errors import InputError
+from ._errors import run_guarded
+
+
+class Kind(enum.StrEnum):
+    press = "press"
+    slip = "slip"
+    both = "both"
+
+
+class Regions(enum.StrEnum):
+    annotations = "annotations"
+    detect = "detect"
+    auto = "auto"
+
+
+class Solver(enum.StrEnum):
+    levenberg_marquardt = "levenberg_marquardt"
+    gauss_newton = "gauss_newton"
+
+
+class CurveModel(enum.StrEnum):
+    pulse = "pulse"
+    step = "step"
+    ramp = "ramp"
+
+
+#: Rows of the table printed in full; beyond it converged rows are elided (failed never are).
+MAX_ROWS = 60
+
+
+def compilation_cache_dir() -> Path:
+    """Where JAX keeps compiled solvers between runs: ``$TACTILE_CACHE_DIR/jax``, else
+    ``~/.cache/tactile/jax``."""
+    root = os.environ.get("TACTILE_CACHE_DIR")
+    return (Path(root) if root else Path.home() / ".cache" / "tactile") / "jax"
+
+
+def enable_compilation_cache() -> Path:
+    """Turn on JAX's persistent compilation cache, so later runs skip XLA compilation."""
+    import jax
+
+    cache = compilation_cache_dir()
+    cache.mkdir(parents=True, exist_ok=True)
+    jax.config.update("jax_compilation_cache_dir", str(cache))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    return cache
+
+
+def _pm(value: Any, se: Any, fmt: str) -> str:
+    if value is None:
+        return "-"
+    return f"{value:{fmt}}" + (f" ± {se:{fmt}}" if se is not None else "")
+
+
+def _summary(records: list[dict[str, Any]]) -> dict[str, Any]:
+    import numpy as np
+
+    ok = [r for r in records if r["status"] == "converged"]
+    r_values = [r["pearson_r"] for r in ok if r["pearson_r"] is not None]
+    return {
+        "n_trials": len(records),
+        "n_converged": len(ok),
+        "n_failed": len(records) - len(ok),
+        "median_pearson_r": float(np.median(r_values)) if r_values else None,
+        "min_pearson_r": float(np.min(r_values)) if r_values else None,
+        "status_counts": dict(Counter(r["status"] for r in records)),
+        "verdict_counts": dict(Counter(r["order_verdict"] for r in records)),
+    }
+
+
+def _print_region(console: Console, region: str, model: str, records: list[dict[str, Any]],
+                  summary: dict[str, Any], group: str | None) -> None:
+    equation = {"pulse": "eq. 16", "ramp": "eq. 17"}.get(model, "eq. 16, T -> inf")
+    table = Table(title=f"{region}: {model} ({equation})")
+    for col, justify in (("trial", "left"), ("force", "right"), ("alpha (ev/bin)", "right"),
+                         ("tau (s)", "right"), ("T (s)", "right"), ("R", "right"),
+                         ("status", "left"), ("steps", "right"), ("order", "left")):
+        table.add_column(col, justify=justify)
+    failed = [r for r in records if r["status"] != "converged"]
+    shown = records
+    if len(records) > MAX_ROWS:
+        keep = {id(r) for r in records[:20] + records[-20:] + failed}
+        shown = [r for r in records if id(r) in keep]
+    for r in shown:
+        bad = r["status"] != "converged"
+        force = r.get("force_level", r.get("force_grade", ""))
+        table.add_row(
+            str(r["trial"]), "" if force is None else str(force),
+            _pm(r["alpha"], r["alpha_se"], ".1f"), _pm(r["tau_s"], r["tau_se"], ".4f"),
+            _pm(r["duration_s"], r["duration_se"], ".3f") if model == "pulse" else "",
+            "-" if r["pearson_r"] is None else f"{r['pearson_r']:.5f}",
+            f"[red]{r['status']}[/]" if bad else r["status"], str(r["n_steps"]),
+            r["order_verdict"],
+        )
+    if len(shown) < len(records):
+        table.caption = (f"{len(records) - len(shown)} converged trials not shown; "
+                         "use --json or --csv for all")
+    console.print(table)
+    for status, n in summary["status_counts"].items():
+        if status != "converged":
+            message = next(r["status_message"] for r in records if r["status"] == status)
+            console.print(f"  [red]{status}[/] ({n} trial(s)): {message}")
+    median = summary["median_pearson_r"]
+    verdicts = ", ".join(f"{k} {v}" for k, v in sorted(summary["verdict_counts"].items()))
+    console.print(
+        f"{region}: {summary['n_converged']} converged, {summary['n_failed']} failed; "
+        f"median R {'-' if median is None else f'{median:.5f}'}; order: {verdicts}"
+        + (f"; written to {group}" if group else "")
+    )
+
+
+def fit_fos_command(
+    file: Annotated[Path, typer.Argument(
+        help="A tactile HDF5 file, or a two-column CSV (header, then t in s, x).",
+        show_default=False)],
+    kind: Annotated[Kind | None, typer.Option(
+        help="Regions to fit (HDF5): press, slip or both; default both.",
+        show_default=False)] = None,
+    regions: Annotated[Regions | None, typer.Option(
+        help="Where the regions come from (HDF5): the trials' annotations, detected in the "
+             "counts, or auto (annotations where present; the default).",
+        show_default=False)] = None,
+    bin_ms: Annotated[float | None, typer.Option(
+        min=0.001, help="Bin width in ms (HDF5); default 20 for events, a count stream's "
+                        "own width.", show_default=False)] = None,
+    model: Annotated[CurveModel | None, typer.Option(
+        help="Model for a CSV curve: pulse (eq. 16), step or ramp (eq. 17).",
+        show_default=False)] = None,
+    press_duration: Annotated[float | None, typer.Option(
+        min=1e-6, help="Known press length T in s for the pulse (default: fitted).",
+        show_default=False)] = None,
+    solver: Annotated[Solver, typer.Option(
+        help="Least-squares solver.")] = Solver.levenberg_marquardt,
+    max_steps: Annotated[int, typer.Option(min=1, help="Solver step limit per fit.")] = 64,
+    order: Annotated[bool, typer.Option(
+        "--order/--no-order",
+        help="Also fit the second-order alternative and give the BIC verdict.")] = True,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON.")] = False,
+    csv_out: Annotated[Path | None, typer.Option(
+        "--csv", help="Also write the table to this CSV file.", show_default=False)] = None,
+    plot: Annotated[Path | None, typer.Option(
+        help="Folder for PNG figures of data and fitted curves (like the paper's Figs. "
+             "11-12).", show_default=False)] = None,
+    overwrite: Annotated[bool, typer.Option(
+        help="Replace existing fit groups in the HDF5 file, and an existing --csv file.")] = False,
+    no_write: Annotated[bool, typer.Option(
+        "--no-write", help="Do not write the fits into the HDF5 file.")] = False,
+) -> None:
+    """Fit first-order-system models to the press (eq. 16) and slip (eq. 17) regions of
+    every trial, all trials at once (paper 000, sec. 4.2).
+
+    Per trial: alpha and tau with standard errors, the press length T, Pearson R, the
+    solver's status and steps, and whether a second order fits better (BIC). An HDF5 file
+    gets the results in /derived/fits/fos_press and fos_slip (validated copy, then
+    renamed over the file). The slip's counts have the extrapolated press response
+    subtracted before eq. 17 is fitted. A CSV curve is fitted with --model. Compiled
+    solvers are cached in $TACTILE_CACHE_DIR/jax (default ~/.cache/tactile/jax), so only
+    the first run pays the compilation.
+    """
+
+    def body() -> None:
+        import h5py
+
+        if not file.is_file():
+            raise InputError("file not found", path=file)
+        if csv_out is not None and csv_out.exists() and not overwrite:
+            raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
+        is_h5 = h5py.is_hdf5(file)
+        if is_h5:
+            if model is not None:
+                raise InputError("--model applies to CSV curves; an HDF5 file's press regions "
+                                 "are fitted with the pulse (eq. 16), slips with the ramp "
+                                 "(eq. 17)", path=file)
+            result = _fit_h5(file)
+        else:
+            for flag, value in (("--kind", kind), ("--regions", regions), ("--bin-ms", bin_ms)):
+                if value is not None:
+                    raise InputError(f"{flag} applies to HDF5 files; a CSV is one curve "
+                                     "fitted with --model", path=file)
+            if model is None:
+                raise InputError("a CSV curve needs --model pulse, step or ramp", path=file)
+            result = _fit_csv(file)
+        _report(result)
+
+    def options() -> Any:
+        from ..fos.fit import FitOptions
+
+        return FitOptions(solver=solver.value, max_steps=max_steps)
+
+    def config() -> dict[str, Any]:
+        return {"kind": (kind or Kind.both).value, "regions": (regions or Regions.auto).value,
+                "bin_ms": bin_ms, "press_duration_s": press_duration, "solver": solver.value,
+                "max_steps": max_steps, "order": order, "criterion": "bic"}
+
+    def _fit_h5(path: Path) -> dict[str, Any]:
+        from ..fos.fit_file import fit_fos_file
+        from ..fos.table import fit_records
+
+        wanted = ["press", "slip"] if (kind or Kind.both) == Kind.both else [kind.value]
+        enable_compilation_cache()
+        with _Status("fitting (the first run compiles the solvers)"):
+            result = fit_fos_file(
+                path, regions=wanted, region_source=(regions or Regions.auto).value,
+                bin_s=None if bin_ms is None else bin_ms / 1000,
+                press_duration_s=press_duration, order=order, options=options(),
+                write=not no_write, overwrite=overwrite, config=config())
+        return {"file": str(path), "input": "hdf5", "bin_s": result.bin_s,
+                "fits": result.fits, "labels": result.labels,
+                "records": {r: fit_records(result.fits[r], result.labels) for r in wanted},
+                "written": result.written}
+
+    def _fit_csv(path: Path) -> dict[str, Any]:
+        from ..fos.curve_csv import read_curve_csv
+        from ..fos.protocol import fit_curve
+        from ..fos.table import fit_records
+
+        t_s, x = read_curve_csv(path)
+        enable_compilation_cache()
+        with _Status("fitting (the first run compiles the solver)"):
+            rf = fit_curve(t_s, x, model=model.value, name=path.stem,
+                           press_duration_s=press_duration, order=order, options=options())
+        return {"file": str(path), "input": "csv", "bin_s": None, "fits": {"curve": rf},
+                "labels": None, "records": {"curve": fit_records(rf)}, "written": {}}
+
+    def _report(result: dict[str, Any]) -> None:
+        from ..fos.table import write_csv
+
+        summaries = {r: _summary(recs) for r, recs in result["records"].items()}
+        figures: list[str] = []
+        if plot is not None:
+            from ..fos.plots import plot_region_fits
+
+            for region, rf in result["fits"].items():
+                if region in result["records"]:
+                    figures += [str(p) for p in plot_region_fits(rf, plot,
+                                                                 labels=result["labels"])]
+        if csv_out is not None:
+            write_csv(csv_out, [rec for recs in result["records"].values() for rec in recs])
+        if as_json:
+            out = {
+                "file": result["file"], "input": result["input"], "bin_s": result["bin_s"],
+                "config": config(),
+                "regions": {
+                    region: {"model": result["fits"][region].model,
+                             "group": result["written"].get(region),
+                             "summary": summaries[region], "fits": recs}
+                    for region, recs in result["records"].items()},
+                "csv": None if csv_out is None else str(csv_out), "figures": figures,
+            }
+            typer.echo(json.dumps(out, indent=2, allow_nan=False))
+            return
+        console = Console(width=None if sys.stdout.isatty() else 160)
+        for region, recs in result["records"].items():
+            _print_region(console, region, result["fits"][region].model, recs,
+                          summaries[region], result["written"].get(region))
+        if csv_out is not None:
+            console.print(f"wrote {csv_out}")
+        if figures:
+            console.print(f"wrote {len(figures)} figure(s) to {plot}")
+
+    run_guarded(body)
+
+
+class _Status:
+    """A spinner on stderr while the fit runs (only when stderr is a terminal)."""
+
+    def __init__(self, message: str):
+        self.message = message
+        self._status = None
+
+    def __enter__(self) -> _Status:
+        if sys.stderr.isatty():
+            self._status = Console(stderr=True).status(self.message)
+            self._status.__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._status is not None:
+            self._status.__exit__(*exc)

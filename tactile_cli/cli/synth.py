@@ -1,0 +1,53 @@
+"""`tactile synth --out FILE [--fits FILE.h5]`"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import run_guarded
+from .progress import RichProgress
+
+
+def synth_command(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.",
+                                      show_default=False)],
+    fits: Annotated[Path | None, typer.Option(
+        help="Tactile file with /derived/fits/fos_press and fos_slip (from `tactile fit-fos`): "
+             "parameters are drawn per force level from its converged fits. Without it, from "
+             "the config's fos section (the paper's values).", show_default=False)] = None,
+    n: Annotated[int, typer.Option("--n", min=1, help="Number of trials.")] = 500,
+    seed: Annotated[int, typer.Option(min=0, help="Random seed (same seed, same trials).")] = 0,
+    config: Annotated[Path | None, typer.Option(
+        "--config", "-c", help="Synth config YAML (see configs/synth_fos.yaml); default: the "
+                               "built-in defaults, which that file repeats.",
+        show_default=False)] = None,
+    bin_ms: Annotated[float | None, typer.Option(
+        min=0.001, help="Bin width in ms; overrides the config's bin_s.",
+        show_default=False)] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
+                                         "terminal).", show_default=False)] = None,
+) -> None:
+    """Model-based training trajectories (paper 000, sec. 5.1): random approach, press, slip
+    and release trials of net event counts per bin from the first-order-system model, with
+    FOS parameters drawn per force level, random timings, initial conditions and counting
+    noise; per-bin action labels and the force level in the schema."""
+
+    def body() -> None:
+        from ..synth import load_synth_config, synthesize
+
+        if fits is not None and not fits.is_file():
+            raise InputError("file not found", path=fits)
+        cfg = load_synth_config(config).with_bin_s(None if bin_ms is None else bin_ms / 1000)
+        with RichProgress(enabled=progress) as bar:
+            result = synthesize(out, n=n, seed=seed, config=cfg, fits=fits,
+                                overwrite=overwrite, progress=bar)
+        source = f"fits in {fits}" if fits is not None else "the config's fos section"
+        typer.echo(f"wrote {result.path}: {result.n} trials, parameters from {source}")
+
+    run_guarded(body)

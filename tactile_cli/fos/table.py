@@ -1,0 +1,154 @@
+"""FOS fit results as a table: columns, JSON records, CSV, and the HDF5 fits group.
+
+The layout of ``/derived/fits/fos_press`` and ``/derived/fits/fos_slip`` (written by
+``tactile fit-fos``, read by ``tactile synth``): one 1-D dataset per column of
+:data:`COLUMNS`, one row per trial, in the file's trial order. Units: ``alpha`` and
+``alpha_se`` in events per bin; ``tau_s``, ``tau_se``, ``duration_s``, ``duration_se``,
+``region_start_s``, ``region_end_s`` in seconds (region bounds from the trial's time
+origin); ``residual_std`` in events per bin; ``delta_bic`` = BIC(first order) - BIC(second
+order), > 0 favouring the second. Parameters of fits that did not converge are NaN and
+their ``status`` says why. Group attributes: ``region``, ``model``, ``bin_s``,
+``duration_fitted``, ``criterion``, ``units_json``, besides the provenance attributes every
+derived group carries.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+
+if TYPE_CHECKING:  # the fitting code (and jax) is not needed to read a fits group
+    from .protocol import RegionFits
+
+#: Columns of a fits group, in order.
+COLUMNS: tuple[str, ...] = (
+    "trial", "alpha", "alpha_se", "tau_s", "tau_se", "duration_s", "duration_se",
+    "residual_std", "pearson_r", "aic", "bic", "status", "n_steps", "n_points",
+    "region_start_s", "region_end_s", "order_verdict", "delta_bic",
+)
+STRING_COLUMNS = frozenset({"trial", "status", "order_verdict"})
+INT_COLUMNS = frozenset({"n_steps", "n_points"})
+UNITS = {
+    "alpha": "events/bin", "alpha_se": "events/bin", "tau_s": "s", "tau_se": "s",
+    "duration_s": "s", "duration_se": "s", "residual_std": "events/bin",
+    "region_start_s": "s", "region_end_s": "s",
+}
+#: Group names of the two regions under /derived/fits.
+GROUP_NAMES = {"press": "fos_press", "slip": "fos_slip"}
+_STR = h5py.string_dtype("utf-8")
+
+
+def fit_columns(rf: RegionFits) -> dict[str, np.ndarray]:
+    """The :data:`COLUMNS` of one region's fits, (n_trials,) each."""
+    f = rf.fit
+    return {
+        "trial": np.array(rf.trials, dtype=object),
+        "alpha": f.alpha, "alpha_se": f.alpha_se, "tau_s": f.tau_s, "tau_se": f.tau_se_s,
+        "duration_s": f.duration_s, "duration_se": f.duration_se_s,
+        "residual_std": f.residual_std, "pearson_r": f.pearson_r, "aic": f.aic, "bic": f.bic,
+        "status": np.array(rf.status, dtype=object),
+        "n_steps": np.asarray(f.n_steps, dtype=np.int64),
+        "n_points": np.asarray(f.n_points, dtype=np.int64),
+        "region_start_s": np.asarray(rf.start_s, dtype=np.float64),
+        "region_end_s": np.asarray(rf.end_s, dtype=np.float64),
+        "order_verdict": np.array(rf.verdict, dtype=object),
+        "delta_bic": np.asarray(rf.delta_bic, dtype=np.float64),
+    }
+
+
+def _json_value(v: Any) -> Any:
+    v = v.item() if isinstance(v, np.generic) else v
+    return None if isinstance(v, float) and not math.isfinite(v) else v
+
+
+def fit_records(
+    rf: RegionFits, labels: Sequence[Mapping[str, Any]] | None = None
+) -> list[dict[str, Any]]:
+    """One JSON-ready dict per trial: region, model, ``force_level``/``force_grade`` when the
+    labels have them, the :data:`COLUMNS` and the status message (NaN becomes None)."""
+    cols = fit_columns(rf)
+    out = []
+    for i in range(len(rf)):
+        row: dict[str, Any] = {"region": rf.region, "model": rf.model}
+        lab = labels[i] if labels is not None else {}
+        for key in ("force_level", "force_grade"):
+            if key in lab:
+                row[key] = _json_value(lab[key])
+        row.update({k: _json_value(cols[k][i]) for k in COLUMNS})
+        row["status_message"] = rf.message(i)
+        out.append(row)
+    return out
+
+
+def write_csv(path: str | Path, records: Sequence[Mapping[str, Any]]) -> Path:
+    """Write records (from :func:`fit_records`) as a CSV with a header; empty cells for None.
+    Written to a temporary file and renamed into place."""
+    path = Path(path)
+    keys: list[str] = []
+    for rec in records:
+        keys.extend(k for k in rec if k not in keys)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            writer = csv.DictWriter(f, fieldnames=keys, restval="")
+            writer.writeheader()
+            for rec in records:
+                writer.writerow({k: "" if v is None else v for k, v in rec.items()})
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_fit_group(group: h5py.Group, rf: RegionFits, *, bin_s: float | None) -> None:
+    """Write one region's fits into ``group`` (an empty group of a writable file)."""
+    for key, values in fit_columns(rf).items():
+        if key in STRING_COLUMNS:
+            group.create_dataset(key, data=np.asarray(values, dtype=object), dtype=_STR)
+        else:
+            group.create_dataset(key, data=values)
+    group.attrs["region"] = rf.region
+    group.attrs["model"] = rf.model
+    group.attrs["duration_fitted"] = bool(rf.fit.duration_fitted)
+    group.attrs["criterion"] = "bic"
+    group.attrs["units_json"] = json.dumps(UNITS, sort_keys=True)
+    if bin_s is not None:
+        group.attrs["bin_s"] = float(bin_s)
+
+
+def read_fit_group(path: str | Path, name: str) -> dict[str, np.ndarray]:
+    """The columns of ``/derived/fits/{name}`` of a tactile file (strings decoded).
+
+    Raises :class:`InputError` naming the file and the HDF5 path when the group or one of
+    its columns is missing, with the command that writes it.
+    """
+    path = Path(path)
+    where = f"/derived/fits/{name}"
+    try:
+        h5 = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+    with h5:
+        if where not in h5:
+            raise InputError(f"no {where}; write it with `tactile fit-fos {path}`", path=path)
+        group = h5[where]
+        missing = [c for c in COLUMNS if c not in group]
+        if missing:
+            raise InputError(f"column {missing[0]!r} is missing; re-run `tactile fit-fos "
+                             f"{path} --overwrite`", path=path, where=where)
+        return {c: (group[c].asstr()[()] if c in STRING_COLUMNS else group[c][()])
+                for c in COLUMNS}
+
+
+__all__ = ["COLUMNS", "GROUP_NAMES", "UNITS", "fit_columns", "fit_records", "read_fit_group",
+           "write_csv", "write_fit_group"]

@@ -1,0 +1,277 @@
+"""The typed config of ``tactile synth`` (``configs/synth_fos.yaml``).
+
+Every value has a default here (the YAML file repeats them with a comment per key; a test
+keeps the two equal). :func:`load_synth_config` validates a whole file before anything is
+drawn: unknown keys are errors, and a problem is one
+:class:`~tactile_cli.errors.InputError` naming the file, the line and the key.
+
+A range ``[low, high]`` is drawn uniformly per trial (``low == high`` fixes it).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..errors import InputError
+
+Range = tuple[float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True)
+
+
+def _range(name: str, value: Range, *, minimum: float | None = 0.0) -> Range:
+    low, high = value
+    if not high >= low or (minimum is not None and not low > minimum):
+        lower = "" if minimum is None else f"{minimum} < "
+        raise ValueError(f"`{name}` (={list(value)}) must be [low, high] with {lower}low <= high")
+    return value
+
+
+class LevelsConfig(_Model):
+    """The force levels a synthetic trial is drawn from, and their grade names."""
+
+    n_levels: int = Field(default=12, ge=1, le=1000)
+    """Force levels 1..n_levels (the paper: 12)."""
+    levels: list[int] | None = None
+    """Levels to draw from (uniformly), e.g. [1, 6, 12]; null = all."""
+    force_grades: list[str] = Field(
+        default=["light", "small", "small medium", "medium", "small big", "big"], min_length=1)
+    """Grade names, lowest first, the levels split evenly among them (as the scene does);
+    used unless the fits file's trials carry force_grade labels."""
+
+    @model_validator(mode="after")
+    def _check(self) -> LevelsConfig:
+        if self.levels is not None:
+            bad = [k for k in self.levels if not 1 <= k <= self.n_levels]
+            if bad or not self.levels or len(set(self.levels)) != len(self.levels):
+                raise ValueError(f"`levels` (={self.levels}) must be distinct levels between 1 "
+                                 f"and n_levels={self.n_levels}")
+        if len(self.force_grades) > self.n_levels:
+            raise ValueError(f"{len(self.force_grades)} force_grades for {self.n_levels} "
+                             "levels; give at most one grade per level")
+        return self
+
+    @property
+    def selected(self) -> list[int]:
+        return sorted(self.levels) if self.levels is not None else list(
+            range(1, self.n_levels + 1))
+
+    def grade_of(self, level: int) -> str:
+        return self.force_grades[(level - 1) * len(self.force_grades) // self.n_levels]
+
+
+class TimingConfig(_Model):
+    """Region durations in s, drawn per trial (action times are continuous, so the 20 ms
+    bin grid has a random phase against them)."""
+
+    approach_s: Range = (0.3, 0.6)
+    """Trial start -> press start: no contact, background only."""
+    press_after_s: Range = (0.6, 0.9)
+    """End of the press input (T) -> slip start; the press region lasts T + this."""
+    slip_s: Range = (0.8, 1.2)
+    """Slip start -> release start."""
+    release_s: Range = (0.6, 1.0)
+    """Release start -> trial end."""
+    release_duration_s: Range = (0.15, 0.25)
+    """Length of the release pulse (at most release_s low)."""
+
+    @field_validator("*")
+    @classmethod
+    def _positive(cls, value: Range, info: Any) -> Range:
+        return _range(info.field_name, value)
+
+    @model_validator(mode="after")
+    def _release_fits(self) -> TimingConfig:
+        if self.release_duration_s[1] > self.release_s[0]:
+            raise ValueError(f"`release_duration_s` high (={self.release_duration_s[1]}) must "
+                             f"not exceed `release_s` low (={self.release_s[0]})")
+        return self
+
+
+class FosConfig(_Model):
+    """FOS parameters per force level when no ``--fits`` file is given: the paper's values
+    (sec. 4.2). Each is log-normal per trial around its level's value with the relative
+    spread ``*_jitter_rel`` (the sd of its logarithm). Gains in events per bin."""
+
+    alpha_press_range: Range = (1365.0, 2280.0)
+    """alpha_1 of eq. 16 at level 1 and at the last level, evenly spaced between (paper)."""
+    alpha_press_jitter_rel: float = Field(default=0.02, ge=0)
+    tau_press_s: float = Field(default=0.300, gt=0)
+    """tau_1 of eq. 16 (paper: about 300 ms)."""
+    tau_press_jitter_rel: float = Field(default=0.03, ge=0)
+    press_duration_s: Range = (0.3, 0.5)
+    """T of eq. 16, uniform (not in the paper; the scene's range). Also used with --fits when
+    the fits had T known rather than fitted."""
+    alpha_slip: float = Field(default=1615.0, gt=0)
+    """alpha_2 of eq. 17 (paper: about 1615)."""
+    alpha_slip_jitter_rel: float = Field(default=0.03, ge=0)
+    tau_slip_s: float = Field(default=0.325, gt=0)
+    """tau_2 of eq. 17 (paper: about 325 ms)."""
+    tau_slip_jitter_rel: float = Field(default=0.03, ge=0)
+    release_gain: Range = (0.7, 0.9)
+    """Release pulse gain as a fraction of alpha_1 (toolkit assumption; never fitted)."""
+
+    @field_validator("alpha_press_range", "press_duration_s", "release_gain")
+    @classmethod
+    def _ranges(cls, value: Range, info: Any) -> Range:
+        return _range(info.field_name, value)
+
+
+class FitsConfig(_Model):
+    """How a ``--fits`` file's converged fits become per-level distributions."""
+
+    exclude_second_order: bool = True
+    """Leave out fits whose order verdict is second_order: the FOS does not describe those
+    trials (the scene's saturated big force), so their FOS parameters are not ones to draw."""
+    min_fits_per_level: int = Field(default=1, ge=1)
+    """Levels with fewer converged fits get their means interpolated between the others."""
+
+
+class NoiseConfig(_Model):
+    """Counting noise of the two polarities around the expected net count mu per bin:
+    positive = k Poisson(((1 + beta) max(mu, 0) + beta max(-mu, 0) + background) / k),
+    negative likewise with the signs swapped; the net is their difference (mean mu)."""
+
+    opposite_fraction: float = Field(default=0.5, ge=0)
+    """beta: events of the opposite polarity per net event (markers darken while strips
+    open, paper Fig. 14); the scene's value."""
+    background_per_bin: Range = (15.0, 25.0)
+    """Background events per bin and polarity (Poisson mean), drawn per trial."""
+    counting_scale: float = Field(default=1.0, gt=0)
+    """k: the counting noise variance is k times Poisson's (1 = Poisson)."""
+
+    @field_validator("background_per_bin")
+    @classmethod
+    def _bg(cls, value: Range) -> Range:
+        if not 0 <= value[0] <= value[1]:
+            raise ValueError(f"`background_per_bin` (={list(value)}) must be [low, high] with "
+                             "0 <= low <= high")
+        return value
+
+
+class InitialConfig(_Model):
+    """Random initial conditions of a trial."""
+
+    baseline_per_bin: Range = (-2.0, 2.0)
+    """A constant offset of the expected net count, events per bin."""
+    state_per_bin: Range = (-20.0, 20.0)
+    """The system's output at t = 0 (a previous action's leftover), decaying with the
+    trial's tau_press."""
+
+    @field_validator("*")
+    @classmethod
+    def _ordered(cls, value: Range, info: Any) -> Range:
+        return _range(info.field_name, value, minimum=None)
+
+
+class SaturationConfig(_Model):
+    """Optional big-force flattening, as the scene models it: level -> r, the expected net
+    count becomes limit * tanh(net / limit) with limit = alpha_press / r."""
+
+    alpha_over_limit: dict[int, float] = Field(default_factory=dict)
+
+    @field_validator("alpha_over_limit")
+    @classmethod
+    def _positive(cls, value: dict[int, float]) -> dict[int, float]:
+        bad = {k: v for k, v in value.items() if not v > 0}
+        if bad:
+            raise ValueError(f"`alpha_over_limit` values must be > 0, got {bad}")
+        return value
+
+
+class SynthConfig(_Model):
+    """Everything ``tactile synth`` draws from (see configs/synth_fos.yaml)."""
+
+    bin_s: float = Field(default=0.02, gt=0, le=1)
+    """Bin width of the event counts, s (the paper's 20 ms)."""
+    width_px: int = Field(default=640, ge=1)
+    """Sensor geometry recorded on the event_counts sensor (the paper's 640 x 480)."""
+    height_px: int = Field(default=480, ge=1)
+    levels: LevelsConfig = LevelsConfig()
+    timing: TimingConfig = TimingConfig()
+    fos: FosConfig = FosConfig()
+    fits: FitsConfig = FitsConfig()
+    noise: NoiseConfig = NoiseConfig()
+    initial: InitialConfig = InitialConfig()
+    saturation: SaturationConfig = SaturationConfig()
+
+    def with_bin_s(self, bin_s: float | None) -> SynthConfig:
+        """A copy with ``bin_s`` replaced (None keeps it)."""
+        if bin_s is None:
+            return self
+        try:
+            return SynthConfig.model_validate({**self.model_dump(), "bin_s": bin_s})
+        except ValidationError as exc:
+            raise InputError(_describe(exc.errors()[0])) from None
+
+
+def load_synth_config(path: str | Path | None) -> SynthConfig:
+    """Read and validate a synth config (None: the defaults); any problem is one
+    :class:`InputError` naming the file, the line and the key."""
+    if path is None:
+        return SynthConfig()
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("config file not found", path=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the config file ({exc.__class__.__name__})",
+                         path=path) from None
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise InputError(f"not valid YAML ({problem})", path=path,
+                         where=None if mark is None else f"line {mark.line + 1}") from None
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, dict):
+        raise InputError("a synth config is a YAML mapping of sections (levels, timing, fos, "
+                         "...); see configs/synth_fos.yaml", path=path)
+    try:
+        return SynthConfig.model_validate(raw)
+    except ValidationError as exc:
+        err = max(exc.errors(), key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
+        keys = tuple(p for p in err["loc"] if isinstance(p, str | int))
+        line = _line_of(text, keys)
+        raise InputError(_describe(err), path=path,
+                         where=None if line is None else f"line {line}") from None
+
+
+def _describe(err: dict[str, Any]) -> str:
+    key = ".".join(str(p) for p in err["loc"])
+    msg = str(err["msg"]).removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        return f"unknown key `{key}`; see configs/synth_fos.yaml for the keys"
+    return f"`{key}`: {msg}" if key else msg
+
+
+def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
+    """1-based line of the deepest YAML key of ``keys`` present in ``text``."""
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return None
+    line = None
+    for part in keys:
+        if not isinstance(node, yaml.MappingNode):
+            return line
+        for key_node, value_node in node.value:
+            if str(getattr(key_node, "value", None)) == str(part):
+                line, node = key_node.start_mark.line + 1, value_node
+                break
+        else:
+            return line
+    return line
+
+
+__all__ = ["FitsConfig", "FosConfig", "InitialConfig", "LevelsConfig", "NoiseConfig",
+           "SaturationConfig", "SynthConfig", "TimingConfig", "load_synth_config"]
