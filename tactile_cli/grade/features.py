@@ -1,0 +1,298 @@
+"""The grader's input: the area of net pressing events in each trial's press region.
+
+Paper 000, sec. 4.4 and Fig. 15: the pressing-force extent shows in the area under the net
+(positive minus negative) event count over the press region. Here the area is the sum of
+the net counts of the bins whose centre lies in the press region, in events (the count
+per bin summed over bins, so it does not depend on the bin width).
+
+Where the numbers come from, per trial of a tactile HDF5 file:
+
+- net counts: the trial's events binned by :func:`tactile_cli.events.trial_counts`, else
+  a sampled stream with a ``net`` channel (``signals/event_counts`` written by
+  ``tactile synth`` or ``tactile accumulate --out``);
+- press region: the trial's annotation labelled ``press``, else the stream's per-sample
+  ``action`` labels, else :func:`tactile_cli.events.segment_actions` on the net counts.
+
+A plain CSV ``trial,area[,level]`` gives the areas directly (any sensor); ``level`` is an
+integer force level or a grade name. A trial whose press region cannot be found gets a
+NaN area and a status saying why; the other trials are unaffected.
+
+With ``kind="fos_alpha"`` the input is instead the press gain alpha_1 that ``tactile
+fit-fos`` stored in ``/derived/fits/fos_press`` (events per bin): the area is proportional
+to alpha_1 times the press duration, so when the duration varies from press to press the
+fitted gain is the better force measure. A trial whose fit did not converge gets NaN.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+from ..store.validate import check_readable
+
+#: Trial labels the grader reads as the truth.
+LABEL_KEYS = ("force_grade", "force_level")
+
+
+def _plain(value: Any) -> Any:
+    """An HDF5 attribute as a plain Python value."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@dataclass(frozen=True)
+class TrialArea:
+    """One trial's grader input.
+
+    ``area`` net events in the press region (NaN when no region was found, see
+    ``status``); ``region_start_s``/``region_end_s`` the region in trial seconds (NaN for a
+    CSV); ``source`` where the region came from (``annotations``, ``sample_labels``,
+    ``segmentation``, ``csv``); ``labels`` the trial's ``force_grade``/``force_level``
+    labels when it has them.
+    """
+
+    file: str
+    trial: str
+    area: float
+    region_start_s: float = float("nan")
+    region_end_s: float = float("nan")
+    source: str = ""
+    labels: dict[str, Any] = field(default_factory=dict)
+    status: str = "ok"
+
+
+def press_area(net: np.ndarray, t_s: np.ndarray, start_s: float, end_s: float) -> float:
+    """Sum of ``net`` (n_bins,) over the bins whose centre ``t_s`` (n_bins,) lies in
+    ``[start_s, end_s)``, events."""
+    t_s = np.asarray(t_s, dtype=np.float64)
+    inside = (t_s >= start_s) & (t_s < end_s)
+    return float(np.asarray(net, dtype=np.float64)[inside].sum())
+
+
+def load_areas(paths: list[Path], *, bin_s: float = 0.02, region: str = "press",
+               kind: str = "area") -> list[TrialArea]:
+    """Grader inputs of every trial of every file: tactile HDF5 files and ``.csv`` tables.
+    ``kind`` ``area`` (the default) or ``fos_alpha`` (see the module docstring)."""
+    if kind not in ("area", "fos_alpha"):
+        raise ValueError(f"`kind` (={kind!r}) must be 'area' or 'fos_alpha'")
+    out: list[TrialArea] = []
+    for path in paths:
+        path = Path(path)
+        if not path.exists():
+            raise InputError("file not found", path=path)
+        if path.suffix.lower() == ".csv":
+            out.extend(read_area_csv(path))
+        elif h5py.is_hdf5(path) and kind == "fos_alpha":
+            out.extend(fos_alphas(path))
+        elif h5py.is_hdf5(path):
+            out.extend(hdf5_areas(path, bin_s=bin_s, region=region))
+        else:
+            raise InputError("neither a tactile HDF5 file nor a .csv table of areas "
+                             "(trial,area[,level])", path=path)
+    return out
+
+
+# -- CSV -------------------------------------------------------------------------------------
+def read_area_csv(path: str | Path) -> list[TrialArea]:
+    """Rows ``trial,area[,level]`` under a header naming those columns (``level`` may also
+    be called ``force_level`` or ``force_grade``)."""
+    path = Path(path)
+    try:
+        f = open(path, newline="", encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read ({exc.__class__.__name__}: {exc})", path=path) from None
+    with f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise InputError("empty file; expected a header trial,area[,level]", path=path)
+    header = [c.strip().lower() for c in rows[0]]
+    level_names = ("level", "force_level", "force_grade")
+    if header[:2] != ["trial", "area"] or len(header) > 3 or (
+            len(header) == 3 and header[2] not in level_names):
+        raise InputError(f"header {','.join(rows[0])!r} must be trial,area or "
+                         "trial,area,level", path=path, where="line 1")
+    out = []
+    seen: set[str] = set()
+    for line, row in enumerate(rows[1:], start=2):
+        if not row or all(not c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise InputError(f"{len(row)} fields, expected {len(header)} "
+                             f"({','.join(header)})", path=path, where=f"line {line}")
+        trial, area_text = row[0].strip(), row[1].strip()
+        if not trial:
+            raise InputError("empty trial name", path=path, where=f"line {line}")
+        if trial in seen:
+            raise InputError(f"trial {trial!r} appears twice", path=path, where=f"line {line}")
+        seen.add(trial)
+        try:
+            area = float(area_text)
+        except ValueError:
+            raise InputError(f"area {area_text!r} is not a number", path=path,
+                             where=f"line {line}") from None
+        if not math.isfinite(area):
+            raise InputError(f"area {area_text!r} is not finite", path=path,
+                             where=f"line {line}")
+        labels: dict[str, Any] = {}
+        if len(header) == 3 and row[2].strip():
+            value = row[2].strip()
+            try:
+                level = int(value)
+            except ValueError:
+                if header[2] == "force_level":
+                    raise InputError(f"force level {value!r} is not a whole number",
+                                     path=path, where=f"line {line}") from None
+                labels["force_grade"] = value
+            else:
+                labels["force_level"] = level
+        out.append(TrialArea(str(path), trial, area, source="csv", labels=labels))
+    return out
+
+
+# -- HDF5 ------------------------------------------------------------------------------------
+def hdf5_areas(path: str | Path, *, bin_s: float = 0.02, region: str = "press") \
+        -> list[TrialArea]:
+    """Areas of every trial of one tactile HDF5 file (see the module docstring)."""
+    path = Path(path)
+    try:
+        check_readable(path)
+        h5 = h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+    plan = []
+    with h5:
+        if "trials" not in h5:
+            raise InputError("no /trials group; not a tactile file", path=path)
+        for name, group in h5["trials"].items():
+            labels = {k: _plain(v) for k, v in group["labels"].attrs.items()
+                      if k in LABEL_KEYS} if "labels" in group else {}
+            annotations = _annotations(group, region)
+            stream = None if "events" in group else _net_stream(h5, group)
+            plan.append((name, labels, annotations, "events" in group, stream))
+    out = []
+    for name, labels, annotations, has_events, stream in plan:
+        out.append(_trial_area(path, name, labels, annotations, has_events, stream,
+                               bin_s=bin_s, region=region))
+    return out
+
+
+def _trial_labels(path: Path) -> dict[str, dict[str, Any]]:
+    with h5py.File(path, "r") as h5:
+        return {name: {k: _plain(v) for k, v in g["labels"].attrs.items() if k in LABEL_KEYS}
+                if "labels" in g else {} for name, g in h5["trials"].items()}
+
+
+def fos_alphas(path: str | Path) -> list[TrialArea]:
+    """The fitted press gain of every trial of ``path`` (``/derived/fits/fos_press``)."""
+    from ..fos.table import read_fit_group
+
+    path = Path(path)
+    try:
+        check_readable(path)
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+    cols = read_fit_group(path, "fos_press")
+    labels = _trial_labels(path)
+    out = []
+    for k, trial in enumerate(cols["trial"]):
+        ok = str(cols["status"][k]) == "converged" and np.isfinite(cols["alpha"][k])
+        out.append(TrialArea(
+            str(path), str(trial), float(cols["alpha"][k]) if ok else float("nan"),
+            float(cols["region_start_s"][k]), float(cols["region_end_s"][k]), "fos_press",
+            labels.get(str(trial), {}),
+            "ok" if ok else f"press fit not converged: {cols['status'][k]}"))
+    return out
+
+
+def _annotations(group: h5py.Group, region: str) -> list[tuple[float, float]]:
+    if "annotations" not in group:
+        return []
+    ann = group["annotations"]
+    labels = ann["label"].asstr()[()]
+    starts, ends = ann["start_s"][()], ann["end_s"][()]
+    want = region.strip().lower()
+    return [(float(s), float(e)) for s, e, lab in zip(starts, ends, labels, strict=True)
+            if str(lab).strip().lower() == want]
+
+
+def _net_stream(h5: h5py.File, group: h5py.Group) -> dict[str, Any] | None:
+    """net counts, bin centres, per-sample action labels of a stream with a ``net`` channel
+    (``event_counts`` first), or None."""
+    if "signals" not in group:
+        return None
+    names = sorted(group["signals"], key=lambda s: s != "event_counts")
+    for stream_name in names:
+        s = group["signals"][stream_name]
+        sensor = h5["sensors"].get(_plain(s.attrs.get("sensor", "")))
+        if sensor is None or "channel_names" not in sensor:
+            continue
+        channels = [str(c) for c in sensor["channel_names"].asstr()[()]]
+        if "net" not in channels:
+            continue
+        out: dict[str, Any] = {
+            "stream": stream_name,
+            "net": s["data"][:, channels.index("net")].astype(np.float64),
+            "t_s": s["t_s"][()],
+            "action": None,
+        }
+        if "sample_labels" in s and "action" in s["sample_labels"]:
+            ds = s["sample_labels"]["action"]
+            classes = [str(_plain(c)) for c in ds.attrs.get("classes", [])]
+            out["action"] = (ds[()], classes)
+        return out
+    return None
+
+
+def _trial_area(path: Path, trial: str, labels: dict[str, Any],
+                annotations: list[tuple[float, float]], has_events: bool,
+                stream: dict[str, Any] | None, *, bin_s: float, region: str) -> TrialArea:
+    if has_events:
+        from ..events import trial_counts  # lazy: the grader also runs on CSV areas
+
+        counts = trial_counts(path, trial, bin_s=bin_s)
+        net, t_s, step_s = counts.net, counts.t_s, counts.bin_s
+        action = None
+    elif stream is not None:
+        net, t_s, action = stream["net"], stream["t_s"], stream["action"]
+        step_s = float(np.median(np.diff(t_s))) if t_s.shape[0] > 1 else bin_s
+    else:
+        return TrialArea(str(path), trial, float("nan"), labels=labels,
+                         status="no events and no stream with a `net` channel")
+    if annotations:
+        start, end = annotations[0]
+        source = "annotations"
+    elif action is not None and region in action[1]:
+        idx = np.flatnonzero(action[0] == action[1].index(region))
+        if idx.size == 0:
+            return TrialArea(str(path), trial, float("nan"), labels=labels,
+                             status=f"no sample labelled {region!r}")
+        start, end = t_s[idx[0]] - 0.5 * step_s, t_s[idx[-1]] + 0.5 * step_s
+        source = "sample_labels"
+    elif region == "press":
+        from ..events import segment_actions
+
+        seg = segment_actions(np.asarray(net, dtype=np.float64), bin_s=step_s)
+        if not seg.ok:
+            return TrialArea(str(path), trial, float("nan"), labels=labels,
+                             status=f"segmentation failed: {seg.message}")
+        start, end = seg.press_start_s, seg.slip_start_s
+        source = "segmentation"
+    else:
+        return TrialArea(str(path), trial, float("nan"), labels=labels,
+                         status=f"no annotation or sample label {region!r}")
+    return TrialArea(str(path), trial, press_area(net, t_s, start, end), float(start),
+                     float(end), source, labels)
+
+
+__all__ = ["LABEL_KEYS", "TrialArea", "fos_alphas", "hdf5_areas", "load_areas", "press_area",
+           "read_area_csv"]
