@@ -13,7 +13,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: demo test ingest bench lint clean
+.PHONY: demo demo-events test ingest bench lint clean
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -53,12 +53,31 @@ demo: $(STAMP)
 	else echo "($(SHARED) not found: real recordings skipped)"; fi
 	$(TACTILE) validate $(DEMO)/h5/*.h5
 	for f in $(DEMO)/h5/*.h5; do $(TACTILE) info "$$f"; done
+	$(MAKE) --no-print-directory demo-events DEMO=$(DEMO)
 	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/report --max-trials 2
 	@echo "report: $(abspath $(DEMO))/report/index.html"
+
+# The event-sensor chain of paper 000 on a simulated marker-event scene with known ground
+# truth: simulate -> ingest (with the truth as annotations and labels) -> accumulate and
+# segment -> fit-fos (eqs. 16-17, figures like Figs. 11-12) -> synth (training trajectories
+# from the fitted parameters) -> frames, slip rates and fuzzy force grades.
+SCENE_GROUPS ?= 2
+demo-events: $(STAMP)
+	rm -rf $(DEMO)/scene $(DEMO)/events
+	mkdir -p $(DEMO)/events $(DEMO)/h5
+	$(TACTILE) simulate marker-events --out $(DEMO)/scene --groups $(SCENE_GROUPS) --seed 0 --no-progress
+	$(TACTILE) ingest $(DEMO)/scene/*.npy --width 640 --height 480 --annotations $(DEMO)/scene/annotations.csv --trial-labels $(DEMO)/scene/trials.csv --out $(DEMO)/h5/scene.h5 --overwrite --no-progress
+	$(TACTILE) accumulate $(DEMO)/h5/scene.h5 --segment --trial g1_level01 --trial g1_level06 --trial g1_level12 --plot $(DEMO)/events/counts --no-progress
+	$(TACTILE) fit-fos $(DEMO)/h5/scene.h5 --plot $(DEMO)/events/fits --csv $(DEMO)/events/fits.csv
+	$(TACTILE) synth --fits $(DEMO)/h5/scene.h5 --n 300 --seed 0 --out $(DEMO)/h5/synth.h5 --overwrite
+	$(TACTILE) frames $(DEMO)/h5/scene.h5 --trial g1_level06 --rois $(DEMO)/scene/scene.json --window-ms 100 --median 3 --sheet-only --out $(DEMO)/events/frames
+	$(TACTILE) slip-rate $(DEMO)/h5/scene.h5 --rois $(DEMO)/scene/scene.json --plot $(DEMO)/events/slip
+	$(TACTILE) grade $(DEMO)/h5/scene.h5 --plot $(DEMO)/events/grade
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py
 	$(BIN)/python benchmarks/fit_fos.py
+	$(BIN)/python benchmarks/fuzzy.py
 
 # ---- batch ingest: one output per input, atomic writes, up-to-date outputs skipped ----
 RAW ?= raw

@@ -90,11 +90,11 @@ class TimingConfig(_Model):
 
     approach_s: Range = (0.3, 0.6)
     """Approach region (no contact: background events only); the press starts after it."""
-    press_region_s: Range = (1.0, 1.4)
+    press_region_s: Range = (1.15, 1.25)
     """Press region, from the press start to the slip start."""
-    press_duration_s: Range = (0.3, 0.5)
+    press_duration_s: Range = (0.395, 0.405)
     """T of eq. 16: how long the press input lasts (at most the shortest press region)."""
-    slip_s: Range = (0.8, 1.2)
+    slip_s: Range = (1.8, 2.2)
     """Slip region, from the slip start to the release start."""
     release_s: Range = (0.6, 1.0)
     """Release region, from the release start to the trial end (rounded up to whole bins)."""
@@ -125,7 +125,7 @@ class FosConfig(_Model):
     alpha_press_range: Range = (1365.0, 2280.0)
     """alpha_1 of eq. 16: the press gains of level 1 and of the top level (sec. 4.2:
     alpha_1 in [1365, 2280]); the levels in between are spaced evenly."""
-    alpha_press_jitter_rel: float = Field(default=0.02, ge=0, le=0.3)
+    alpha_press_jitter_rel: float = Field(default=0.01, ge=0, le=0.3)
     """Per-trial jitter of alpha_1 around its level's value."""
     tau_press_s: float = Field(default=0.300, gt=0)
     """tau_1 of eq. 16, seconds (sec. 4.2: about 300 ms)."""
@@ -156,7 +156,7 @@ class SaturationConfig(_Model):
     count of a saturated level is ``limit * tanh(net / limit)`` with
     ``limit = alpha_1 / ratio``; levels not listed stay linear."""
 
-    alpha_over_limit: dict[int, float] = Field(default_factory=lambda: {12: 1.0})
+    alpha_over_limit: dict[int, float] = Field(default_factory=lambda: {12: 0.6})
     """Force level -> ratio r = alpha_1 / limit (r > 0; bigger r flattens more)."""
 
     @field_validator("alpha_over_limit")
@@ -171,7 +171,7 @@ class SaturationConfig(_Model):
 class PolarityConfig(_Model):
     """How the net count splits into positive and negative events (sec. 4.4, Fig. 14)."""
 
-    opposite_fraction: float = Field(default=0.5, ge=0, le=10)
+    opposite_fraction: float = Field(default=0.35, ge=0, le=10)
     """beta: pressing darkens the markers (negative events) while the strip apertures open
     (positive events); per bin, positive = (1 + beta) max(net, 0) + beta max(-net, 0) and
     negative = beta max(net, 0) + (1 + beta) max(-net, 0), so positive - negative = net."""

@@ -74,7 +74,7 @@ class TimingConfig(_Model):
     """Trial start -> press start: no contact, background only."""
     press_after_s: Range = (0.6, 0.9)
     """End of the press input (T) -> slip start; the press region lasts T + this."""
-    slip_s: Range = (0.8, 1.2)
+    slip_s: Range = (0.8, 2.5)
     """Slip start -> release start."""
     release_s: Range = (0.6, 1.0)
     """Release start -> trial end."""

@@ -90,7 +90,7 @@ def test_unknown_config_key_names_the_key_file_and_line(tmp_path):
 def test_geometry_error_names_the_key(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("strips:\n  rest_y_px: 100\n")
-    with pytest.raises(InputError, match=r"strips: the strip ROIs span y -85\.\.125 px"):
+    with pytest.raises(InputError, match=r"strips: the strip ROIs span y -219\.\.125 px"):
         load_scene_config(bad)
 
 
@@ -121,9 +121,9 @@ def test_alpha_levels_spread_evenly_and_speeds_cover_every_group():
         assert t.slip_speed_px_s == pytest.approx(t.slip_speed_m_s * px_per_m, abs=1e-6)
         tl = t.timeline
         assert 0.3 <= tl.press_start_s <= 0.6
-        assert 1.0 <= tl.slip_start_s - tl.press_start_s <= 1.4 + 1e-9
-        assert 0.3 <= tl.press_duration_s <= 0.5
-        assert 0.8 <= tl.release_start_s - tl.slip_start_s <= 1.2 + 1e-9
+        assert 1.15 <= tl.slip_start_s - tl.press_start_s <= 1.25 + 1e-9
+        assert 0.395 <= tl.press_duration_s <= 0.405 + 1e-9
+        assert 1.8 <= tl.release_start_s - tl.slip_start_s <= 2.2 + 1e-9
         assert round(tl.end_s / 0.02, 9) == int(round(tl.end_s / 0.02))  # whole bins
 
 
@@ -135,7 +135,9 @@ def test_saturation_applies_to_the_configured_level_only(scene):
         linear = expected_net_counts(rates.t_s, trial.timeline, trial.params)
         cell = rows[trial.name]["saturation_limit"]
         if trial.force_level == 12:
-            assert trial.saturation_limit == pytest.approx(trial.params.alpha_press, abs=1e-3)
+            # r = alpha_1 / limit = 0.6 by default
+            assert trial.saturation_limit == pytest.approx(trial.params.alpha_press / 0.6,
+                                                           rel=1e-6)
             assert float(cell) == trial.saturation_limit
             assert rates.net.max() < trial.saturation_limit
             assert rates.net.max() < 0.8 * linear.max()  # visibly flattened
@@ -230,7 +232,7 @@ def test_annotations_and_trials_csv_agree(scene):
     assert scene_json["seed"] == SEED and scene_json["command"] == "test"
     assert scene_json["sensor"]["strip_distance_m"] == 0.03
     assert [r["name"] for r in scene_json["rois"]] == ["strip1", "strip2", "strip3", "strip4"]
-    assert scene_json["rois"][0] == {"name": "strip1", "x0_px": 125, "y0_px": 215,
+    assert scene_json["rois"][0] == {"name": "strip1", "x0_px": 125, "y0_px": 81,
                                      "x1_px": 155, "y1_px": 425}
     assert SceneConfig.model_validate(scene_json["config"]) == config
 
