@@ -1,13 +1,11 @@
 """End to end on the marker-event scene: simulate, ingest, calibrate on one seed, grade
 another (issue 5, item 4: >= 95 % graded to the true grade, every error one grade at most).
 
-The scene is run with a fixed press protocol: the same press duration T and press region
-in every trial, alpha_1 jitter 0.5 %, tau_1 jitter 1 % and the top level saturated with
-r = 0.5. With the scene's defaults (T drawn from [0.3, 0.5] s, alpha_1 jitter 2 %, r = 1.0
-for level 12) the area of net pressing events cannot reach the target at all (it is
-proportional to alpha_1 T: the force levels are 5 % apart, T varies by +-25 %); the
-measured numbers are in benchmarks/RESULTS_fuzzy.md. Slip, release and approach are
-shortened only to keep the test fast; they do not enter the press-region area.
+The scene runs with its defaults for everything that enters the press-region area (press
+region, press duration T, alpha_1 and tau_1 jitter, saturation r = 0.6 of level 12).
+Approach, slip and release are shortened only to keep the test fast; they do not enter the
+area. The stability sweep (benchmarks/grade_stability.py) shows where grading breaks: a T
+spread beyond +-5 %, alpha_1 jitter beyond 1.5 %, saturation r >= 0.9.
 """
 
 from __future__ import annotations
@@ -23,11 +21,8 @@ scene_mod = pytest.importorskip("tactile_cli.scene", reason="the marker-event sc
 runner = CliRunner()
 
 GRADING_SCENE = {
-    "timing": {"approach_s": [0.3, 0.3], "press_region_s": [1.2, 1.2],
-               "press_duration_s": [0.4, 0.4], "slip_s": [0.3, 0.3], "release_s": [0.3, 0.3],
+    "timing": {"approach_s": [0.3, 0.3], "slip_s": [0.3, 0.3], "release_s": [0.3, 0.3],
                "release_duration_s": [0.15, 0.15]},
-    "fos": {"alpha_press_jitter_rel": 0.005, "tau_press_jitter_rel": 0.01},
-    "saturation": {"alpha_over_limit": {12: 0.5}},
 }
 
 
