@@ -196,9 +196,9 @@ needs_scene = pytest.mark.skipif(importlib.util.find_spec("tactile_cli.scene") i
 @needs_scene
 def test_scene_end_to_end(tmp_path):
     """12 force levels of the scene: simulate, ingest with annotations and labels, fit-fos,
-    compare with trials.csv. Measured (seed 0): press alpha and tau within 5 % for all 11
-    unsaturated trials, R 0.993-0.997; slip tau errors within 3.5 standard errors (the slips
-    of 0.8-1.2 s determine tau to about 6 %); the saturated level 12 flagged."""
+    compare with trials.csv. Measured (seed 0, group 1): press alpha and tau within 5 % for
+    all 11 unsaturated trials, R >= 0.9954; slip alpha and tau within 5 % for 10 of 11, R >=
+    0.9993 (the full 48-trial scene: 42 of 44, 95.5 %); the saturated level 12 flagged."""
     scene, h5 = tmp_path / "scene", tmp_path / "scene.h5"
     result = runner.invoke(app, ["simulate", "marker-events", "--out", str(scene), "--seed",
                                  "0", "--groups", "1"])
@@ -234,6 +234,11 @@ def test_scene_end_to_end(tmp_path):
                         if r["tau_s"] is not None else np.inf for r in slip])
     tau_se = np.array([r["tau_se"] if r["tau_se"] is not None else 0.0 for r in slip])
     assert (tau_err[~saturated] <= 3.5 * tau_se[~saturated]).all()
+    slip_within = (rel(slip, "alpha", "alpha_slip") <= 0.05) & (rel(slip, "tau_s",
+                                                                    "tau_slip_s") <= 0.05)
+    assert slip_within[~saturated].sum() >= 10  # of 11; 95 % needs all 11 of so few trials
+    r_slip = np.array([r["pearson_r"] for r in slip])
+    assert (r_slip[~saturated] >= 0.999).all()
     # the saturated trials: the FOS does not describe them, and the results say so per trial
     flagged = [r["order_verdict"] != "first_order" or r["status"] != "converged"
                for r, s in zip(slip, saturated, strict=True) if s]
