@@ -11,10 +11,19 @@ from typing import Annotated
 import typer
 
 from .._version import __version__
+from . import accumulate as _accumulate
+from . import evaluate as _evaluate
+from . import fit_fos as _fit_fos
+from . import frames as _frames
+from . import grade as _grade
 from . import info as _info
 from . import ingest as _ingest
 from . import plot as _plot
 from . import samples as _samples
+from . import simulate as _simulate
+from . import slip_rate as _slip_rate
+from . import synth as _synth
+from . import train as _train
 from . import validate as _validate
 
 app = typer.Typer(
@@ -57,11 +66,43 @@ app.command("info", help="Sensors, trials, labels and durations of a tactile HDF
 app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 files.")(
     _plot.plot_command
 )
+app.command("accumulate", help="Event counts per 20 ms bin, moving average and action regions.")(
+    _accumulate.accumulate_command
+)
 app.command("samples", help="Write small synthetic recordings of every input format.")(
     _samples.samples_command
 )
+app.command("fit-fos", help="Fit FOS models (eqs. 16-17) to the press and slip regions.")(
+    _fit_fos.fit_fos_command
+)
+app.command("synth", help="Model-based training trajectories of event counts (FOS, sec. 5.1).")(
+    _synth.synth_command
+)
 app.command("validate", help="Check HDF5 files against the tactile schema; list every violation.")(
     _validate.validate_command
+)
+
+app.command("frames", help="Event frames (PNG) and a contact sheet with ROIs, like Fig. 13.")(
+    _frames.frames_command
+)
+)
+app.command("slip-rate", help="Slip speed and displacement from ROI event centroids (m/s, m).")(
+    _slip_rate.slip_rate_command
+)
+
+app.command("grade", help="Grade the pressing force of every trial (fuzzy, Table III).")(
+    _grade.grade_command
+)
+app.add_typer(_simulate.app, name="simulate")
+
+_MANY_FILES = {"allow_extra_args": True}  # `--data a.h5 b.h5` (a shell glob after --data)
+app.command("train", context_settings=_MANY_FILES,
+            help="Train an LSTM, CNN, FNN or MLP on windows of HDF5 recordings (run folder).")(
+    _train.train_command
+)
+app.command("evaluate", context_settings=_MANY_FILES,
+            help="Accuracy, per-class P/R/F1, confusion matrix and latency of a trained run.")(
+    _evaluate.evaluate_command
 )
 
 

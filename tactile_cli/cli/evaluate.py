@@ -1,0 +1,101 @@
+"""`tactile evaluate RUN --data FILE... [--split test|all] [--json]`"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import run_guarded
+from .train import data_files
+
+
+def evaluate_command(
+    ctx: typer.Context,
+    run: Annotated[Path, typer.Argument(help="Run folder written by `tactile train`.",
+                                        show_default=False)],
+    data: Annotated[
+        list[Path] | None,
+        typer.Option("--data", "-d", help="Tactile HDF5 file(s) to evaluate on; repeat the "
+                     "option or list several files after it.", show_default=False),
+    ] = None,
+    split: Annotated[
+        str, typer.Option(help="all: every trial; test: the trials the run's split rule puts "
+                          "in test (on the training files, the training's test split).")
+    ] = "all",
+    name: Annotated[
+        str | None,
+        typer.Option(help="Name of the results folder RUN/eval/<name> (default from the data "
+                     "file names).", show_default=False),
+    ] = None,
+    threads: Annotated[
+        int, typer.Option(min=1, help="torch CPU threads for the latency measurement.")
+    ] = 1,
+    latency: Annotated[
+        bool, typer.Option("--latency/--no-latency", help="Measure latency and throughput.")
+    ] = True,
+    as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
+) -> None:
+    """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
+    matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
+    window at batch 1 and windows/s at batch 1024 on this machine, parameters and size.
+    Files go to RUN/eval/<name>/."""
+
+    def body() -> None:
+        from rich.console import Console
+        from rich.table import Table
+
+        from ..learn.evaluate import ClassificationMetrics, evaluate
+        from ..learn.runs import dumps
+
+        files = data_files(data, ctx)
+        if not files:
+            raise InputError("no data files; give --data FILE...")
+        if split not in ("all", "test"):
+            raise InputError(f"--split must be all or test, got {split!r}")
+        result = evaluate(run, files, split=split, name=name,  # type: ignore[arg-type]
+                          latency=latency, threads=threads)
+        if as_json:
+            typer.echo(dumps(result.as_dict()))
+        else:
+            console = Console(width=None if sys.stdout.isatty() else 120)
+            console.print(f"[bold]{result.run}[/] ({result.family}) on {result.n_trials} "
+                          f"trials, {result.n_windows:,} windows, split {result.split}")
+            for m in result.heads:
+                if isinstance(m, ClassificationMetrics):
+                    table = Table(title=f"{m.head}: accuracy {100 * m.accuracy:.2f} %")
+                    for col in ("class", "precision", "recall", "F1", "support"):
+                        table.add_column(col, justify="left" if col == "class" else "right")
+                    for c in m.per_class:
+                        table.add_row(c.name, f"{c.precision:.5f}", f"{c.recall:.5f}",
+                                      f"{c.f1:.5f}", f"{c.support:,}")
+                    if m.accuracy_excluding_boundaries is not None:
+                        table.caption = (
+                            f"without the {m.n_near_boundary:,} windows within "
+                            f"{m.boundary_margin} sample(s) of a label change: "
+                            f"{100 * m.accuracy_excluding_boundaries:.2f} %")
+                    console.print(table)
+                else:
+                    console.print(f"{m.head}: MAE {m.mae:.4g}, RMSE {m.rmse:.4g} ({m.n:,} "
+                                  "windows)")
+            cost = Table(title="Cost on this machine")
+            for col in ("parameters", "size (MB)", "batch-1 median (ms)", "batch-1 p95 (ms)",
+                        "windows/s", "threads"):
+                cost.add_column(col, justify="right")
+            lat = result.latency
+            cost.add_row(f"{result.n_params:,}", f"{result.size_mb:.3f}",
+                         "" if lat is None else f"{lat.batch1_ms_median:.3f}",
+                         "" if lat is None else f"{lat.batch1_ms_p95:.3f}",
+                         "" if lat is None else f"{lat.windows_per_s:,.0f}",
+                         "" if lat is None else str(lat.threads))
+            console.print(cost)
+            console.print(f"wrote {result.out_dir}")
+        if result.overlaps_training and split == "all":
+            print(f"tactile: warning: {', '.join(result.overlaps_training)} was used to train "
+                  "this run; these metrics include training trials (use --split test)",
+                  file=sys.stderr)
+
+    run_guarded(body)

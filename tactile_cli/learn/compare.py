@@ -1,0 +1,528 @@
+"""``tactile compare``: accuracy against cost of several runs, and the model a scene needs.
+
+Issue 4, item 5. Each run's ``RUN/eval/<name>/metrics.json`` (written by ``tactile
+evaluate``, see :mod:`.evaluate`) gives its score on one evaluation data set and its cost
+on this machine. The runs must have been evaluated on the same data (the same files, by
+SHA-256, and the same split); :func:`compare` refuses to put other numbers side by side.
+
+What is compared:
+
+* the score: overall accuracy of the primary head (default), its macro F1
+  (``metric="macro_f1"``) or the F1 of one class (``metric="f1:slip"``), as a fraction;
+* the cost a real-time user pays: latency per window at batch 1, median (ms).
+
+The Pareto front holds the runs no other run dominates; run *s* dominates run *r* when
+``score_s >= score_r`` and ``latency_s <= latency_r`` with at least one of them strict
+(lower latency and higher score are better; exact ties are both on the front).
+
+"The model this scene needs" (the issue's "model no more than a scene needs"): among the
+runs whose score is within ``margin_pp`` percentage points of the best, the one with the
+fewest parameters, ties broken by lower latency then by label. The fastest run within the
+margin (lowest batch-1 latency, ties by fewer parameters) is named beside it.
+
+Outputs (:func:`write_comparison`): ``compare.png`` (the chart), ``compare.csv`` (the
+table) and ``compare.json`` (the table, the choice and the provenance: command, tool
+version, the metrics files read with their SHA-256), each written atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import InputError
+from ..store.writer import current_command, sha256_of, utc_now
+from . import runs
+
+COMPARE_PNG = "compare.png"
+COMPARE_CSV = "compare.csv"
+COMPARE_JSON = "compare.json"
+COMPARE_FORMAT = "tactile-compare"
+COMPARE_FORMAT_VERSION = 1
+
+
+# -- atomic files ----------------------------------------------------------------------------
+def write_atomic(path: str | Path, data: bytes | str) -> Path:
+    """Write ``data`` to ``path`` through a temporary sibling and ``os.replace``: the file
+    is either the old one or complete, never half-written."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        if isinstance(data, str):
+            tmp.write_text(data, encoding="utf-8")
+        else:
+            tmp.write_bytes(data)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+# -- pure selection --------------------------------------------------------------------------
+def pareto_front(score: np.ndarray, latency_ms: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points no other point dominates (higher score and lower latency are
+    better; see the module docstring). NaN latency or score: never on the front and
+    dominating nothing."""
+    s = np.asarray(score, dtype=np.float64)
+    lat = np.asarray(latency_ms, dtype=np.float64)
+    if s.shape != lat.shape or s.ndim != 1:
+        raise ValueError(f"`score` {s.shape} and `latency_ms` {lat.shape} must be equal 1-D")
+    ok = np.isfinite(s) & np.isfinite(lat)
+    ge = s[:, None] >= s[None, :]  # [j, i]: j scores at least as high as i
+    le = lat[:, None] <= lat[None, :]
+    strict = (s[:, None] > s[None, :]) | (lat[:, None] < lat[None, :])
+    dominates = ge & le & strict & ok[:, None] & ok[None, :]
+    return ok & ~dominates.any(axis=0)
+
+
+def within_margin(score: np.ndarray, margin_pp: float) -> np.ndarray:
+    """(n,) bool: score (fraction) within ``margin_pp`` percentage points of the best.
+    A tolerance of 1e-9 keeps a run exactly at the margin inside it."""
+    if not margin_pp >= 0:
+        raise ValueError(f"`margin_pp` (={margin_pp}) must be >= 0")
+    s = np.asarray(score, dtype=np.float64)
+    if not np.isfinite(s).any():
+        return np.zeros(s.shape, dtype=bool)
+    best = np.nanmax(s)
+    return np.isfinite(s) & (s >= best - margin_pp / 100.0 - 1e-9)
+
+
+def pick_needed(n_params: np.ndarray, latency_ms: np.ndarray, eligible: np.ndarray,
+                labels: Sequence[str]) -> int:
+    """Index of the eligible point with the fewest parameters (ties: lower latency, a
+    missing latency counting as slowest, then label)."""
+    idx = np.flatnonzero(eligible)
+    if idx.size == 0:
+        raise ValueError("no eligible point")
+    lat = np.where(np.isfinite(latency_ms), latency_ms, np.inf)
+    return int(min(idx, key=lambda i: (int(n_params[i]), float(lat[i]), labels[i])))
+
+
+def pick_fastest(n_params: np.ndarray, latency_ms: np.ndarray, eligible: np.ndarray,
+                 labels: Sequence[str]) -> int | None:
+    """Index of the eligible point with the lowest latency (ties: fewer parameters, then
+    label); None when no eligible point has a latency."""
+    idx = [i for i in np.flatnonzero(eligible) if np.isfinite(latency_ms[i])]
+    if not idx:
+        return None
+    return int(min(idx, key=lambda i: (float(latency_ms[i]), int(n_params[i]), labels[i])))
+
+
+# -- reading runs ----------------------------------------------------------------------------
+@dataclass
+class RunPoint:
+    """One run's evaluation: score, cost and where they came from.
+
+    score, accuracy, macro_f1: fractions (0..1) of the primary head; latency_ms,
+    latency_p95_ms: per window at batch 1 (median, 95th percentile) on the machine that
+    ran ``tactile evaluate``; windows_per_s at its large batch; size_mb of the state dict.
+    """
+
+    run: str
+    label: str
+    family: str
+    eval_name: str
+    metrics_path: str
+    score: float
+    accuracy: float | None
+    macro_f1: float | None
+    latency_ms: float | None
+    latency_p95_ms: float | None
+    windows_per_s: float | None
+    n_params: int
+    size_mb: float
+    n_windows: int
+    split: str
+    primary_head: str
+    data: list[dict[str, Any]] = field(default_factory=list)
+    latency_threads: int | None = None
+    cpu: str = ""
+    pareto: bool = False
+    within_margin: bool = False
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass
+class Comparison:
+    """Runs on one evaluation data set side by side (see the module docstring)."""
+
+    points: list[RunPoint]
+    metric: str
+    data_name: str
+    margin_pp: float
+    best: RunPoint
+    needed: RunPoint
+    fastest: RunPoint | None
+    pareto: list[RunPoint]  # on the front, by increasing latency
+    inputs: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def metric_label(self) -> str:
+        if self.metric == "accuracy":
+            return "accuracy"
+        if self.metric == "macro_f1":
+            return "macro F1"
+        return f"F1 of class {self.metric.split(':', 1)[1]!r}"
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "metric": self.metric, "data_name": self.data_name, "margin_pp": self.margin_pp,
+            "best": self.best.label, "needed": self.needed.label,
+            "fastest": None if self.fastest is None else self.fastest.label,
+            "pareto": [p.label for p in self.pareto],
+            "runs": [p.as_dict() for p in self.points],
+        }
+
+    def summary(self) -> str:
+        """Two sentences naming the model this scene needs and the fastest within margin."""
+        n = self.needed
+        text = (f"the model this scene needs: {n.label} ({n.n_params:,} parameters, "
+                f"{self.metric_label} {100 * n.score:.2f} %, {_ms(n.latency_ms)} per window), "
+                f"the smallest within {self.margin_pp:g} pp of the best ({self.best.label}, "
+                f"{100 * self.best.score:.2f} %)")
+        f = self.fastest
+        if f is not None:
+            text += (f"; fastest within the margin: {f.label} ({_ms(f.latency_ms)}, "
+                     f"{f.n_params:,} parameters)")
+        return text
+
+
+def _ms(value: float | None) -> str:
+    return "latency not measured" if value is None else f"{value:.3f} ms"
+
+
+def eval_names(run_dir: Path) -> list[str]:
+    """Names of the evaluations of a run that have a metrics.json, sorted."""
+    d = run_dir / runs.EVAL_DIR
+    if not d.is_dir():
+        return []
+    return sorted(p.name for p in d.iterdir()
+                  if p.is_dir() and (p / runs.METRICS_JSON).is_file())
+
+
+def check_run_folder(path: Path) -> Path:
+    """``path`` if it is a run folder (has run.json), else an InputError saying so."""
+    if not path.is_dir():
+        raise InputError("run folder not found (give a folder `tactile train` wrote)",
+                         path=path)
+    if not (path / runs.RUN_JSON).is_file():
+        raise InputError("not a run folder (no run.json); train one with `tactile train`",
+                         path=path)
+    return path
+
+
+def choose_data_name(run_dirs: Sequence[Path], data_name: str | None) -> str:
+    """The evaluation every run has: ``data_name`` when given, else the one name all
+    runs share (an error lists the names when there are none or several)."""
+    names = {d: eval_names(d) for d in run_dirs}
+    if data_name is not None:
+        for d, have in names.items():
+            if data_name not in have:
+                raise InputError(
+                    f"no evaluation named {data_name!r} (evaluations: "
+                    f"{', '.join(have) or 'none'}); run `tactile evaluate {d} --data FILE` "
+                    "on the same data as the other runs", path=d)
+        return data_name
+    for d, have in names.items():
+        if not have:
+            raise InputError("the run has no evaluation (no eval/<name>/metrics.json); run "
+                             f"`tactile evaluate {d} --data FILE` first", path=d)
+    common = sorted(set.intersection(*(set(v) for v in names.values())))
+    if len(common) == 1:
+        return common[0]
+    if not common:
+        listing = "; ".join(f"{d}: {', '.join(v)}" for d, v in names.items())
+        raise InputError(f"the runs share no evaluation ({listing}); evaluate them on the "
+                         "same data with `tactile evaluate RUN --data FILE`")
+    raise InputError(f"the runs share several evaluations ({', '.join(common)}); choose one "
+                     "with --data-name")
+
+
+def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
+    head_name = metrics.get("primary_head")
+    if head_name is None:
+        raise InputError("the run has no classification head to compare (primary_head is "
+                         "null)", path=path)
+    head = metrics["heads"][head_name]
+    if metric == "accuracy":
+        value = head["accuracy"]
+    elif metric == "macro_f1":
+        value = head["macro_f1"]
+    elif metric.startswith("f1:"):
+        cls = metric.split(":", 1)[1]
+        found = [c for c in head["per_class"] if c["name"] == cls]
+        if not found:
+            raise InputError(f"--metric {metric}: head {head_name!r} has no class {cls!r} "
+                             f"(classes: {', '.join(c['name'] for c in head['per_class'])})",
+                             path=path)
+        value = found[0]["f1"]
+    else:
+        raise InputError(f"--metric must be accuracy, macro_f1 or f1:<class>, got {metric!r}")
+    if value is None or not math.isfinite(value):
+        raise InputError(f"{metric} is not a number in this evaluation (no windows of the "
+                         "class?)", path=path)
+    return float(value)
+
+
+def _labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
+    """``family/<folder name>``; ``family/<parent>/<folder>`` where folder names repeat."""
+    names = [d.resolve().name for d in run_dirs]
+    out = []
+    for d, fam, name in zip(run_dirs, families, names, strict=True):
+        if names.count(name) > 1:
+            name = f"{d.resolve().parent.name}/{name}"
+        out.append(f"{fam}/{name}")
+    return out
+
+
+def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> RunPoint:
+    """The :class:`RunPoint` of ``RUN/eval/<data_name>/metrics.json``."""
+    path = run_dir / runs.EVAL_DIR / data_name / runs.METRICS_JSON
+    try:
+        m = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"no evaluation named {data_name!r}; run `tactile evaluate`",
+                         path=run_dir) from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"metrics.json is not valid JSON ({exc})", path=path) from None
+    if m.get("format") != runs.EVAL_FORMAT:
+        raise InputError(f"metrics.json format is {m.get('format')!r}, not "
+                         f"{runs.EVAL_FORMAT!r}", path=path)
+    score = _score(m, metric, path)
+    head = m["heads"][m["primary_head"]]
+    lat = m.get("latency") or {}
+    model = m.get("model") or {}
+    return RunPoint(
+        run=str(run_dir), label=label or f"{m.get('family', '?')}/{run_dir.name}",
+        family=str(m.get("family", "?")), eval_name=data_name, metrics_path=str(path),
+        score=score, accuracy=head.get("accuracy"), macro_f1=head.get("macro_f1"),
+        latency_ms=lat.get("batch1_ms_median"), latency_p95_ms=lat.get("batch1_ms_p95"),
+        windows_per_s=lat.get("windows_per_s"), n_params=int(model.get("n_params", 0)),
+        size_mb=float(model.get("size_mb", math.nan)), n_windows=int(m.get("n_windows", 0)),
+        split=str(m.get("split", "")), primary_head=str(m["primary_head"]),
+        data=[{"path": d.get("path"), "sha256": d.get("sha256")} for d in m.get("data", [])],
+        latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
+    )
+
+
+def _check_same_data(points: Sequence[RunPoint]) -> None:
+    ref = points[0]
+    ref_hashes = sorted(d["sha256"] for d in ref.data)
+    for p in points[1:]:
+        if sorted(d["sha256"] for d in p.data) != ref_hashes:
+            raise InputError(
+                f"evaluation {p.eval_name!r} used other data files than {ref.run} "
+                f"({', '.join(str(d['path']) for d in p.data)} vs "
+                f"{', '.join(str(d['path']) for d in ref.data)}); evaluate every run on the "
+                "same files", path=p.metrics_path)
+        if p.split != ref.split:
+            raise InputError(f"evaluation split is {p.split!r} here but {ref.split!r} in "
+                             f"{ref.run}; evaluate every run with the same --split",
+                             path=p.metrics_path)
+
+
+def compare_points(points: Sequence[RunPoint], *, margin_pp: float = 0.5,
+                   metric: str = "accuracy", data_name: str = "") -> Comparison:
+    """Mark the Pareto front and the margin on ``points`` (in place) and choose."""
+    if not points:
+        raise InputError("no runs to compare; give RUN folders")
+    if not (math.isfinite(margin_pp) and margin_pp >= 0):
+        raise InputError(f"--margin must be a number >= 0 (percentage points), got {margin_pp}")
+    score = np.array([p.score for p in points], dtype=np.float64)
+    lat = np.array([math.nan if p.latency_ms is None else p.latency_ms for p in points])
+    n_params = np.array([p.n_params for p in points], dtype=np.int64)
+    labels = [p.label for p in points]
+    front = pareto_front(score, lat)
+    near = within_margin(score, margin_pp)
+    for p, f, w in zip(points, front, near, strict=True):
+        p.pareto, p.within_margin = bool(f), bool(w)
+    best = int(max(range(len(points)), key=lambda i: (score[i], -n_params[i])))
+    needed = pick_needed(n_params, lat, near, labels)
+    fastest = pick_fastest(n_params, lat, near, labels)
+    on_front = sorted((p for p in points if p.pareto), key=lambda p: (p.latency_ms, -p.score))
+    return Comparison(list(points), metric, data_name, float(margin_pp), points[best],
+                      points[needed], None if fastest is None else points[fastest], on_front)
+
+
+def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
+            margin_pp: float = 0.5, metric: str = "accuracy") -> Comparison:
+    """Read every run's evaluation on the same data and compare them.
+
+    ``data_name`` is the folder name under ``RUN/eval/`` (default: the one all runs
+    share). Raises :class:`InputError` for a missing run or evaluation, evaluations of
+    different data, or a run without a classification head.
+    """
+    dirs = [check_run_folder(Path(d)) for d in run_dirs]
+    if not dirs:
+        raise InputError("no runs to compare; give RUN folders")
+    seen: set[Path] = set()
+    for d in dirs:
+        if d.resolve() in seen:
+            raise InputError("run given twice", path=d)
+        seen.add(d.resolve())
+    name = choose_data_name(dirs, data_name)
+    families = []
+    for d in dirs:
+        try:
+            info = json.loads((d / runs.RUN_JSON).read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise InputError(f"run.json is not valid JSON ({exc})",
+                             path=d / runs.RUN_JSON) from None
+        families.append(str(info.get("model", {}).get("family", "?")))
+    labels = _labels(dirs, families)
+    points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
+    _check_same_data(points)
+    cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name)
+    cmp.inputs = [{"path": p.metrics_path, "sha256": sha256_of(p.metrics_path)}
+                  for p in points]
+    return cmp
+
+
+# -- outputs ---------------------------------------------------------------------------------
+TABLE_COLUMNS = ("label", "family", "score_pct", "delta_pp", "accuracy_pct", "macro_f1",
+                 "latency_ms_median", "latency_ms_p95", "windows_per_s", "n_params",
+                 "size_mb", "pareto", "within_margin", "needed", "fastest", "run")
+
+
+def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
+    """One dict per run with :data:`TABLE_COLUMNS` (percentages in %, delta to the best in
+    percentage points)."""
+    rows = []
+    for p in cmp.points:
+        rows.append({
+            "label": p.label, "family": p.family, "score_pct": 100 * p.score,
+            "delta_pp": 100 * (p.score - cmp.best.score),
+            "accuracy_pct": None if p.accuracy is None else 100 * p.accuracy,
+            "macro_f1": p.macro_f1, "latency_ms_median": p.latency_ms,
+            "latency_ms_p95": p.latency_p95_ms, "windows_per_s": p.windows_per_s,
+            "n_params": p.n_params, "size_mb": p.size_mb, "pareto": p.pareto,
+            "within_margin": p.within_margin, "needed": p is cmp.needed,
+            "fastest": p is cmp.fastest, "run": p.run,
+        })
+    return rows
+
+
+def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
+    """The chart as PNG bytes: score (%) against batch-1 median latency per window (ms, log
+    axis), every run labelled ``family/name``, the Pareto front as a dashed staircase with
+    ringed points, the margin band under the best score, the needed model starred and
+    the fastest within the margin as a diamond. Runs without latency are listed below."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fams = sorted({p.family for p in cmp.points})
+    colour = {f: f"C{i % 10}" for i, f in enumerate(fams)}
+    fig, ax = plt.subplots(figsize=(8.5, 5.2))
+    timed = [p for p in cmp.points if p.latency_ms is not None and p.latency_ms > 0]
+    for fam in fams:
+        pts = [p for p in timed if p.family == fam]
+        if pts:
+            ax.scatter([p.latency_ms for p in pts], [100 * p.score for p in pts], s=46,
+                       color=colour[fam], label=fam, zorder=3)
+    if cmp.pareto:
+        xs = [p.latency_ms for p in cmp.pareto]
+        ys = [100 * p.score for p in cmp.pareto]
+        ax.step(xs, ys, where="post", ls="--", color="0.35", lw=1.2, zorder=2,
+                label="Pareto front")
+        ax.scatter(xs, ys, s=150, facecolors="none", edgecolors="0.2", lw=1.2, zorder=4)
+    best = 100 * cmp.best.score
+    ax.axhspan(best - cmp.margin_pp, best, color="C2", alpha=0.12, zorder=1,
+               label=f"within {cmp.margin_pp:g} pp of the best")
+    if cmp.needed.latency_ms:
+        ax.scatter([cmp.needed.latency_ms], [100 * cmp.needed.score], marker="*", s=320,
+                   color="gold", edgecolors="black", zorder=5,
+                   label=f"needed: {cmp.needed.label}")
+    if cmp.fastest is not None and cmp.fastest.latency_ms:
+        ax.scatter([cmp.fastest.latency_ms], [100 * cmp.fastest.score], marker="D", s=80,
+                   facecolors="none", edgecolors="C3", lw=1.6, zorder=5,
+                   label=f"fastest within margin: {cmp.fastest.label}")
+    for p in timed:
+        ax.annotate(p.label, (p.latency_ms, 100 * p.score), xytext=(6, 5),
+                    textcoords="offset points", fontsize=8, zorder=6)
+    if timed:
+        from matplotlib.ticker import FuncFormatter
+
+        ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if
+                                                   f"{v:.1e}"[0] in "25" else ""))
+        lo = min(p.latency_ms for p in timed)
+        hi = max(p.latency_ms for p in timed)
+        ax.set_xlim(lo / 1.6, hi * 2.2)  # room for the labels on the right
+    ys_all = [100 * p.score for p in cmp.points]
+    span = max(max(ys_all) - min(ys_all), cmp.margin_pp, 0.5)
+    ax.set_ylim(min(ys_all) - 0.15 * span, max(ys_all) + 0.15 * span)
+    ax.set_xlabel("latency per window, batch 1, median (ms)")
+    ax.set_ylabel(f"{cmp.metric_label} (%)")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(title or f"{cmp.metric_label} against latency on {cmp.data_name} "
+                          f"({len(cmp.points)} runs)", fontsize=10)
+    missing = [p.label for p in cmp.points if p not in timed]
+    if missing:
+        fig.text(0.01, 0.01, "no latency measured (not drawn): " + ", ".join(missing),
+                 fontsize=7)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, metadata={"Software": f"tactile {__version__}"})
+    plt.close(fig)
+    return buf.getvalue()
+
+
+@dataclass(frozen=True)
+class ComparisonFiles:
+    png: Path
+    csv: Path
+    json: Path
+
+
+def comparison_record(cmp: Comparison, *, command: str | None = None) -> dict[str, Any]:
+    """compare.json: the comparison with its provenance."""
+    return {
+        "format": COMPARE_FORMAT, "format_version": COMPARE_FORMAT_VERSION,
+        "tool_version": __version__, "created_utc": utc_now(),
+        "command": command if command is not None else current_command(),
+        "inputs": cmp.inputs, **cmp.as_dict(), "summary": cmp.summary(),
+        "table": table_rows(cmp),
+    }
+
+
+def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | None = None
+                     ) -> ComparisonFiles:
+    """Write compare.png, compare.csv and compare.json into ``out_dir`` (created), each
+    atomically; compare.json is written last, so its presence means the set is complete."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("--out exists and is not a folder", path=out)
+    png = write_atomic(out / COMPARE_PNG, plot_comparison(cmp))
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(TABLE_COLUMNS), lineterminator="\n")
+    w.writeheader()
+    for row in table_rows(cmp):
+        w.writerow({k: "" if v is None else v for k, v in row.items()})
+    csv_path = write_atomic(out / COMPARE_CSV, buf.getvalue())
+    json_path = write_atomic(out / COMPARE_JSON,
+                             runs.dumps(comparison_record(cmp, command=command)) + "\n")
+    return ComparisonFiles(png, csv_path, json_path)
+
+
+__all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "ComparisonFiles",
+           "RunPoint", "check_run_folder", "choose_data_name", "compare", "compare_points",
+           "comparison_record", "eval_names", "pareto_front", "pick_fastest", "pick_needed",
+           "plot_comparison", "read_point", "table_rows", "within_margin", "write_atomic",
+           "write_comparison"]

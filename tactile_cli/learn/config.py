@@ -1,0 +1,407 @@
+"""The YAML training config of ``tactile train``: data, model, optimiser and seed.
+
+One typed model validated as a whole before any data are read. Every level forbids
+unknown keys, and :func:`load_config` turns any problem into one
+:class:`~tactile_cli.errors.InputError` naming the config file, the line and the key
+(``configs/train_lstm_actions.yaml`` documents every key)::
+
+    version: 1
+    seed: 0
+    data:
+      stream: event_counts        # /trials/{trial}/signals/{stream}
+      channels: [net]             # by name (the sensor's channel_names)
+      window: 25                  # samples per window
+      stride: 1                   # samples between window starts (overlap = window - stride)
+      pad: zero                   # none | zero | edge: left padding so early samples get windows
+      transform: signed_log1p     # none | signed_log1p, before normalisation
+      label_rule: last            # last | majority
+      label_delay: 0              # target sample = window end - label_delay (with `last`)
+      targets:
+        - {name: action}                                   # sample label, classification
+        - {name: force_level, source: trial, kind: regression, weight: 0.5}
+      split: {mode: auto, val_fraction: 0.2, test_fraction: 0.0}
+    model: {family: lstm, hidden: 64, layers: 1}
+    optim: {lr: 0.003, batch_size: 256, epochs: 30, patience: 5}
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from ..errors import InputError
+
+#: Summary features of the MLP family, in the order they are computed (per channel).
+SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope")
+#: Model families of the registry (``model.family``).
+FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class TargetConfig(_Model):
+    """One output head: what it predicts and how much its loss counts."""
+
+    name: str = Field(min_length=1)
+    """Sample-label name (``signals/{stream}/sample_labels/{name}``) or trial-label name
+    (``/trials/{trial}/labels`` attribute) when ``source: trial``."""
+    kind: Literal["classification", "regression"] = "classification"
+    source: Literal["sample", "trial"] = "sample"
+    weight: float = Field(default=1.0, gt=0)
+    """Factor of this head's loss in the total (paper 001, eq. 3 uses 1 for every head)."""
+
+
+class SplitConfig(_Model):
+    """How trials (never windows) are divided into train, val and test."""
+
+    mode: Literal["auto", "attribute", "random"] = "auto"
+    """``attribute``: each trial's ``split`` attribute (train/val/test); ``random``: seeded
+    by trial with the fractions below; ``auto``: the attribute when every trial has one,
+    random when none has."""
+    val_fraction: float = Field(default=0.2, ge=0, lt=1)
+    test_fraction: float = Field(default=0.0, ge=0, lt=1)
+    seed: int | None = None
+    """Seed of the random split; default the run's ``seed``."""
+
+    @model_validator(mode="after")
+    def _fractions(self) -> SplitConfig:
+        if self.val_fraction + self.test_fraction >= 1:
+            raise ValueError(
+                f"val_fraction + test_fraction (={self.val_fraction + self.test_fraction}) "
+                "must be < 1: some trials must remain for training"
+            )
+        return self
+
+
+class DataConfig(_Model):
+    """Which stream and channels, how they are cut into windows, and what to predict."""
+
+    stream: str = Field(min_length=1)
+    """Signal stream of every trial. ``event_counts`` is also computed on the fly from a
+    trial's events (bins of ``bin_s``) when the trial has no such stream."""
+    channels: list[str] = Field(min_length=1)
+    """Channel names of the stream's sensor, in the order the model sees them."""
+    window: int = Field(ge=1)
+    """Samples per window."""
+    stride: int = Field(default=1, ge=1)
+    """Samples between the ends of consecutive windows."""
+    pad: Literal["none", "zero", "edge"] = "none"
+    """Left padding of each trial by ``window - 1`` samples so that every sample can end a
+    window: ``zero`` pads with 0 in raw units (no events before the trial starts), ``edge``
+    repeats the first sample; ``none`` starts at the first full window."""
+    label_rule: Literal["last", "majority"] = "last"
+    """Per-window target of a sample label: the label of the window's last sample (minus
+    ``label_delay``), what a real-time user gets; or the most frequent label in the window
+    (ties go to the lower class index). Regression sample labels: the last value or the
+    window mean."""
+    label_delay: int = Field(default=0, ge=0)
+    """With ``last``: the target is the label ``label_delay`` samples before the window's
+    end, so the decision for a sample is made after that many later samples (a latency of
+    ``label_delay`` samples that lets the model see a transition's first samples)."""
+    targets: list[TargetConfig] = Field(min_length=1)
+    bin_s: float = Field(default=0.02, gt=0)
+    """Bin width (s) of event counts computed on the fly from events."""
+    transform: Literal["none", "signed_log1p"] = "none"
+    """Applied to every sample before normalisation: ``signed_log1p`` is
+    ``sign(x) log(1 + |x|)``, which keeps both tens and thousands of events per bin
+    visible (event counts span three decades within one trial)."""
+    normalise: bool = True
+    """Per-channel standardisation with statistics from the training split only."""
+    class_weights: bool = True
+    """Weight each classification loss by inverse class frequency in the training split."""
+    split: SplitConfig = SplitConfig()
+    boundary_margin: int = Field(default=1, ge=0)
+    """Evaluation also reports accuracy without the windows whose target sample is within
+    this many samples of a change of its sample label."""
+
+    @model_validator(mode="after")
+    def _check(self) -> DataConfig:
+        if len(set(self.channels)) != len(self.channels):
+            raise ValueError(f"`channels` has duplicates: {self.channels}")
+        names = [t.name for t in self.targets]
+        if len(set(names)) != len(names):
+            raise ValueError(f"`targets` names repeat: {names}")
+        if self.label_rule == "majority" and self.label_delay:
+            raise ValueError("`label_delay` applies to `label_rule: last` only")
+        if self.label_delay >= self.window:
+            raise ValueError(
+                f"`label_delay` (={self.label_delay}) must be < `window` (={self.window}): "
+                "the target sample lies inside the window"
+            )
+        return self
+
+
+class _Family(_Model):
+    dropout: float = Field(default=0.0, ge=0, lt=1)
+    head_hidden: list[Annotated[int, Field(ge=1)]] = []
+    """Hidden fully connected layers of each head before its output layer (paper 001 uses
+    two per task); empty: the trunk's features go straight to one linear output layer."""
+
+
+def _odd_kernel(value: int) -> int:
+    if value % 2 == 0:
+        raise ValueError(f"kernel (={value}) must be odd: 'same' padding centres an odd kernel")
+    return value
+
+
+class LstmConfig(_Family):
+    """LSTM over the window; the last hidden state feeds the heads (paper 000, Table I:
+    one LSTM layer, a fully connected layer, softmax)."""
+
+    family: Literal["lstm"]
+    hidden: int = Field(default=64, ge=1)
+    layers: int = Field(default=1, ge=1)
+
+
+class Cnn1dConfig(_Family):
+    """1-D convolutions over time (channels as input channels), flattened into the heads."""
+
+    family: Literal["cnn1d"]
+    channels: list[Annotated[int, Field(ge=1)]] = Field(default=[32, 32], min_length=1)
+    kernel: int = Field(default=5, ge=1)
+    """Samples; odd, so that 'same' padding centres it."""
+    pool: int = Field(default=2, ge=1)
+    """Max-pool factor after each convolution (skipped when the sequence is too short)."""
+
+    _odd = field_validator("kernel")(_odd_kernel)
+
+
+class Cnn2dSpectrogramConfig(_Family):
+    """2-D convolutions over the log-magnitude spectrogram of each channel (torch.stft),
+    channels as image channels (paper 001, sec. 5.3)."""
+
+    family: Literal["cnn2d_spectrogram"]
+    n_fft: int = Field(default=16, ge=2)
+    hop: int = Field(default=4, ge=1)
+    channels: list[Annotated[int, Field(ge=1)]] = Field(default=[16, 32], min_length=1)
+    kernel: int = Field(default=3, ge=1)
+    """Odd, so that 'same' padding centres it."""
+
+    _odd = field_validator("kernel")(_odd_kernel)
+
+
+class FnnConfig(_Family):
+    """Fully connected network on the flattened window (paper 001, sec. 5.1)."""
+
+    family: Literal["fnn"]
+    hidden: list[Annotated[int, Field(ge=1)]] = Field(default=[128, 64], min_length=1)
+
+
+class MlpConfig(_Family):
+    """Fully connected network on summary features of the window (per channel)."""
+
+    family: Literal["mlp"]
+    hidden: list[Annotated[int, Field(ge=1)]] = Field(default=[64, 64], min_length=1)
+    features: list[Literal["mean", "std", "min", "max", "last", "slope"]] = Field(
+        default=list(SUMMARY_FEATURES), min_length=1
+    )
+
+
+ModelConfig = Annotated[
+    LstmConfig | Cnn1dConfig | Cnn2dSpectrogramConfig | FnnConfig | MlpConfig,
+    Field(discriminator="family"),
+]
+
+
+class OptimConfig(_Model):
+    """Optimiser, batches, epochs and early stopping."""
+
+    optimizer: Literal["adam", "sgd"] = "adam"
+    lr: float = Field(default=1e-3, gt=0)
+    momentum: float = Field(default=0.9, ge=0, lt=1)
+    """SGD only."""
+    weight_decay: float = Field(default=0.0, ge=0)
+    lr_schedule: Literal["constant", "cosine"] = "constant"
+    """``cosine``: the learning rate falls from ``lr`` to 0 over ``epochs`` (cosine
+    annealing, stepped per epoch), which settles the weights for precise boundaries."""
+    batch_size: int = Field(default=256, ge=1)
+    epochs: int = Field(default=30, ge=1)
+    patience: int = Field(default=5, ge=0)
+    """Stop after this many epochs without improvement of ``monitor`` on the validation
+    split and keep the best epoch's weights; 0 trains every epoch (and keeps the best)."""
+    monitor: Literal["val_loss", "val_accuracy"] = "val_loss"
+    grad_clip: float = Field(default=0.0, ge=0)
+    """Clip the gradient's global norm to this value before each step; 0: no clipping."""
+    threads: int = Field(default=1, ge=1)
+    """torch CPU threads during training. One is fastest for the small networks here (an
+    LSTM step of batch 256 took 26 ms on 1 thread and 64 ms on 2 of this machine's busy 2
+    cores) and keeps results independent of the machine's core count; raise it for large
+    convolutional networks."""
+
+
+class TrainConfig(_Model):
+    """A whole ``tactile train`` config."""
+
+    version: Literal[1] = 1
+    seed: int = 0
+    data: DataConfig
+    model: ModelConfig
+    optim: OptimConfig = OptimConfig()
+
+    @model_validator(mode="after")
+    def _check(self) -> TrainConfig:
+        m = self.model
+        if isinstance(m, Cnn2dSpectrogramConfig) and m.n_fft > self.data.window:
+            raise ValueError(
+                f"model.n_fft (={m.n_fft}) must be <= data.window (={self.data.window})"
+            )
+        return self
+
+    def with_overrides(self, *, seed: int | None = None, epochs: int | None = None
+                       ) -> TrainConfig:
+        """A copy with the command-line ``--seed`` / ``--epochs`` applied (validated)."""
+        raw = self.model_dump(mode="json")
+        if seed is not None:
+            raw["seed"] = seed
+        if epochs is not None:
+            raw["optim"]["epochs"] = epochs
+        return TrainConfig.model_validate(raw)
+
+    def as_yaml(self) -> str:
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+# -- loading ----------------------------------------------------------------------------------
+def load_config(path: str | Path) -> TrainConfig:
+    """Read and validate a training config; any problem is one :class:`InputError` line
+    naming the file, the line and the key."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("config file not found", path=path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read the config ({exc.__class__.__name__}: {exc})",
+                         path=path) from None
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = None if mark is None else f"line {mark.line + 1}, column {mark.column + 1}"
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise InputError(f"not valid YAML ({problem})", path=path, where=where) from None
+    return parse_config(raw, path=path, text=text)
+
+
+def parse_config(raw: Any, *, path: str | Path | None = None, text: str | None = None
+                 ) -> TrainConfig:
+    """Validate an already-parsed config (a dict); errors as :func:`load_config`."""
+    if not isinstance(raw, dict):
+        raise InputError("a training config is a YAML mapping with keys data, model (and "
+                         "optionally version, seed, optim); see configs/train_lstm_actions.yaml",
+                         path=path)
+    try:
+        return TrainConfig.model_validate(raw)
+    except ValidationError as exc:
+        errors = exc.errors()
+        # an unknown key first: a misspelt key also makes the intended one "missing"
+        err = max(errors, key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
+        keys = _keys_in_file(tuple(err["loc"]), raw, missing=err["type"] == "missing")
+        line = _line_of(text, keys) if text and keys else None
+        raise InputError(_describe(err, keys), path=path,
+                         where=None if line is None else f"line {line}") from None
+
+
+def _keys_in_file(loc: tuple[Any, ...], raw: Any, *, missing: bool) -> tuple[Any, ...]:
+    """The parts of a pydantic ``loc`` that are keys or list indexes of the document (the
+    union member tags that pydantic inserts, such as ``lstm``, are dropped)."""
+    out: list[Any] = []
+    node = raw
+    for i, part in enumerate(loc):
+        last = i == len(loc) - 1
+        if isinstance(part, int):
+            if isinstance(node, list) and part < len(node):
+                out.append(part)
+                node = node[part]
+            continue
+        if isinstance(node, dict) and part in node:
+            out.append(part)
+            node = node[part]
+        elif last and missing and isinstance(node, dict):
+            out.append(part)
+    return tuple(out)
+
+
+def _key_path(keys: tuple[Any, ...]) -> str:
+    out = ""
+    for part in keys:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+_ALLOWED: dict[tuple[str, ...], type[BaseModel]] = {
+    (): TrainConfig, ("data",): DataConfig, ("optim",): OptimConfig,
+    ("data", "split"): SplitConfig, ("data", "targets"): TargetConfig,
+}
+_FAMILY_MODELS: dict[str, type[BaseModel]] = {
+    "lstm": LstmConfig, "cnn1d": Cnn1dConfig, "cnn2d_spectrogram": Cnn2dSpectrogramConfig,
+    "fnn": FnnConfig, "mlp": MlpConfig,
+}
+
+
+def _describe(err: dict[str, Any], keys: tuple[Any, ...]) -> str:
+    key = _key_path(keys)
+    msg = str(err["msg"]).removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        parents = tuple(k for k in keys[:-1] if not isinstance(k, int))
+        model = _ALLOWED.get(parents)
+        if parents == ("model",) and len(err["loc"]) > 1:
+            model = _FAMILY_MODELS.get(str(err["loc"][1]))
+        hint = ""
+        if model is not None:
+            hint = f" (allowed here: {', '.join(model.model_fields)})"
+        return f"unknown key `{key}`{hint}"
+    if err["type"] == "missing":
+        return f"missing key `{key}`"
+    if err["type"] == "union_tag_invalid" or err["type"] == "union_tag_not_found":
+        return f"`{key}`: model.family must be one of {', '.join(FAMILIES)}"
+    if not keys:
+        return msg
+    value = err.get("input")
+    shown = ""
+    if not (isinstance(value, dict | list) or value is None or repr(value) in msg):
+        shown = f" (got {value!r})"
+    return f"`{key}`: {msg}{shown}"
+
+
+def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
+    """1-based line of the node at ``keys`` in the YAML text (via the composed node tree)."""
+    try:
+        node = yaml.compose(text)
+    except yaml.YAMLError:
+        return None
+    line = None
+    for part in keys:
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if k.value == part:
+                    line = k.start_mark.line + 1
+                    node = v
+                    break
+            else:
+                return line
+        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
+            if part >= len(node.value):
+                return line
+            node = node.value[part]
+            line = node.start_mark.line + 1
+        else:
+            return line
+    return line
+
+
+__all__ = ["FAMILIES", "SUMMARY_FEATURES", "Cnn1dConfig", "Cnn2dSpectrogramConfig",
+           "DataConfig", "FnnConfig", "LstmConfig", "MlpConfig", "ModelConfig", "OptimConfig",
+           "SplitConfig", "TargetConfig", "TrainConfig", "load_config", "parse_config"]

@@ -1,0 +1,650 @@
+"""Datasets from tactile HDF5 files: trials, splits by trial, normalisation and windows.
+
+The pipeline of ``tactile train`` and ``tactile evaluate`` (issue 4, item 2):
+
+1. :func:`read_trials` reads the configured stream of every trial (channels selected by
+   name) with its per-sample labels and trial labels. A trial with events but no
+   ``event_counts`` stream is counted on the fly (contract 2:
+   :func:`tactile_cli.events.accumulate.trial_counts`) and labelled per bin from its
+   annotations (:func:`~tactile_cli.events.accumulate.counts_to_labels`).
+2. :func:`assign_splits` divides trials (never windows) into train/val/test: the trials'
+   ``split`` attribute, or a seeded random order by trial.
+3. :func:`fit_normalisation` takes per-channel mean and standard deviation from the
+   training trials' samples only; the statistics are saved with the model.
+4. :func:`make_windows` cuts each trial into windows of ``window`` samples whose ends are
+   ``stride`` samples apart, with one target per head: the label of the window's last
+   sample (minus ``label_delay``; causal, what a real-time user gets) or the window's
+   majority label; trial labels are the same for every window of the trial.
+
+Windows are not copied: a :class:`WindowSet` keeps the normalised samples of all trials
+back to back and the start index of every window, and gathers a batch on demand.
+
+Label conventions: a per-sample class index below 0 means "unlabelled" (no annotation
+covers the sample); windows whose target is unlabelled (or NaN for regression) are left
+out, for every head at once.
+
+Summary features (the MLP family, :func:`summary_features`): per channel, over the window,
+``mean``, ``std`` (population), ``min``, ``max``, ``last`` (the last sample) and ``slope``
+(least-squares slope against the sample index, in normalised units per sample); the
+feature vector is feature-major: all channels' means, then all stds, and so on.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..errors import InputError
+from .config import SUMMARY_FEATURES, DataConfig, SplitConfig, TargetConfig
+from .heads import HeadSpec
+
+SPLITS: tuple[str, ...] = ("train", "val", "test")
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@dataclass
+class TrialSeries:
+    """The selected channels and labels of one trial.
+
+    x: (n, c) float32 samples in the sensor's units (channels in config order).
+    t_s: (n,) float64 sample times, seconds from the trial's time origin.
+    sample_labels: name -> (n,) per-sample label (int64 class index, -1 = unlabelled, or
+    float64 for numeric labels). classes: name -> class names of categorical labels.
+    trial_labels: the trial's ``labels`` attributes. split_attr: its ``split`` attribute.
+    origin: ``"signal"`` (a stored stream) or ``"events"`` (counted on the fly).
+    """
+
+    file: str
+    trial: str
+    split_attr: str
+    x: np.ndarray
+    t_s: np.ndarray
+    sample_labels: dict[str, np.ndarray] = field(default_factory=dict)
+    classes: dict[str, tuple[str, ...] | None] = field(default_factory=dict)
+    trial_labels: dict[str, Any] = field(default_factory=dict)
+    origin: str = "signal"
+
+    @property
+    def key(self) -> str:
+        """``<file name>/<trial>``: how the trial is named in splits and predictions."""
+        return f"{Path(self.file).name}/{self.trial}"
+
+
+# -- reading ---------------------------------------------------------------------------------
+def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeries]:
+    """Every trial of the given files, with the configured stream, channels and the
+    sample labels the config's targets need.
+
+    Raises :class:`InputError` naming the file and HDF5 path when a trial lacks the
+    stream, a channel or a label (it lists what is there).
+    """
+    from ..store.validate import check_readable
+
+    sample_targets = [t.name for t in data.targets if t.source == "sample"]
+    trials: list[TrialSeries] = []
+    for path in paths:
+        path = Path(path)
+        if not path.exists():
+            raise InputError("data file not found", path=path)
+        try:
+            check_readable(path)
+            h5 = h5py.File(path, "r")
+        except OSError as exc:
+            raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+        with h5:
+            if "trials" not in h5 or len(h5["trials"]) == 0:
+                raise InputError("the file has no trials", path=path)
+            for name, group in h5["trials"].items():
+                trials.append(_read_trial(path, h5, name, group, data, sample_targets))
+    return trials
+
+
+def _read_trial(path: Path, h5: h5py.File, name: str, group: h5py.Group, data: DataConfig,
+                sample_targets: list[str]) -> TrialSeries:
+    split_attr = str(_plain(group.attrs.get("split", "")))
+    trial_labels = {k: _plain(v) for k, v in group["labels"].attrs.items()} \
+        if "labels" in group else {}
+    signals = group.get("signals")
+    where = f"/trials/{name}"
+    if signals is not None and data.stream in signals:
+        stream = signals[data.stream]
+        sensor = str(_plain(stream.attrs["sensor"]))
+        sensor_group = h5["sensors"].get(sensor)
+        if sensor_group is None or "channel_names" not in sensor_group:
+            raise InputError(f"sensor {sensor!r} has no channel_names; channels cannot be "
+                             "selected by name", path=path, where=f"/sensors/{sensor}")
+        names = list(sensor_group["channel_names"].asstr()[()])
+        columns = []
+        for ch in data.channels:
+            if ch not in names:
+                raise InputError(f"channel {ch!r} is not a channel of sensor {sensor!r} "
+                                 f"(channels: {', '.join(names)}); fix data.channels",
+                                 path=path, where=f"{where}/signals/{data.stream}")
+            columns.append(names.index(ch))
+        raw = stream["data"][()]
+        x = np.ascontiguousarray(raw[:, columns], dtype=np.float32)
+        t_s = stream["t_s"][()].astype(np.float64)
+        labels: dict[str, np.ndarray] = {}
+        classes: dict[str, tuple[str, ...] | None] = {}
+        available = list(stream["sample_labels"].keys()) if "sample_labels" in stream else []
+        for label in sample_targets:
+            if label not in available:
+                raise InputError(
+                    f"no per-sample label {label!r} (labels: {', '.join(available) or 'none'}); "
+                    "fix data.targets or use `source: trial` for a trial label",
+                    path=path, where=f"{where}/signals/{data.stream}/sample_labels")
+            ds = stream["sample_labels"][label]
+            values = ds[()]
+            if "classes" in ds.attrs:
+                classes[label] = tuple(str(_plain(c)) for c in ds.attrs["classes"])
+                labels[label] = values.astype(np.int64)
+            else:
+                classes[label] = None
+                labels[label] = values.astype(np.int64) if values.dtype.kind in "iub" \
+                    else values.astype(np.float64)
+        return TrialSeries(str(path), name, split_attr, x, t_s, labels, classes, trial_labels,
+                           "signal")
+    if data.stream == "event_counts" and "events" in group:
+        return _count_events(path, name, split_attr, trial_labels, data, sample_targets)
+    streams = list(signals.keys()) if signals is not None else []
+    hint = " and no events to count" if data.stream == "event_counts" else ""
+    raise InputError(f"trial has no stream {data.stream!r}{hint} (streams: "
+                     f"{', '.join(streams) or 'none'}); fix data.stream", path=path, where=where)
+
+
+def _count_events(path: Path, name: str, split_attr: str, trial_labels: dict[str, Any],
+                  data: DataConfig, sample_targets: list[str]) -> TrialSeries:
+    """Event counts of a trial without an ``event_counts`` stream, with action labels
+    from its annotations (contract 2)."""
+    from ..events import accumulate  # lazy: only event recordings need it
+    from ..fos.actions import ACTIONS
+
+    counts = accumulate.trial_counts(path, name, bin_s=data.bin_s)
+    stacked = {"positive": counts.positive, "negative": counts.negative, "net": counts.net}
+    for ch in data.channels:
+        if ch not in stacked:
+            raise InputError(f"channel {ch!r} is not an event-count channel (channels: "
+                             f"{', '.join(stacked)}); fix data.channels", path=path,
+                             where=f"/trials/{name}/events")
+    x = np.stack([stacked[ch] for ch in data.channels], axis=1).astype(np.float32)
+    labels: dict[str, np.ndarray] = {}
+    classes: dict[str, tuple[str, ...] | None] = {}
+    for label in sample_targets:
+        if label != "action":
+            raise InputError(f"per-sample label {label!r} is not available for event counts "
+                             "computed from events (only `action`, from the annotations)",
+                             path=path, where=f"/trials/{name}")
+        annotations = accumulate.read_annotations(path, name)
+        if not annotations:
+            raise InputError("trial has no annotations, so its bins have no action labels",
+                             path=path, where=f"/trials/{name}/annotations")
+        labels[label] = accumulate.counts_to_labels(counts.t_s, annotations).astype(np.int64)
+        classes[label] = tuple(ACTIONS)
+    return TrialSeries(str(path), name, split_attr, x, counts.t_s.astype(np.float64), labels,
+                       classes, trial_labels, "events")
+
+
+# -- heads and targets -----------------------------------------------------------------------
+def resolve_heads(targets: Sequence[TargetConfig], trials: Sequence[TrialSeries]
+                  ) -> list[HeadSpec]:
+    """The output heads of the config's targets, with class names taken from the data.
+
+    Sample labels with a ``classes`` attribute use it (it must be the same in every trial);
+    a categorical trial label's classes are its distinct values, sorted.
+    """
+    heads = []
+    for target in targets:
+        classes: tuple[str, ...] = ()
+        if target.kind == "classification":
+            if target.source == "sample":
+                classes = _sample_classes(target.name, trials)
+            else:
+                values = {_trial_value(t, target.name) for t in trials}
+                classes = tuple(sorted((str(v) for v in values), key=_natural))
+            if len(classes) < 2:
+                raise InputError(f"target {target.name!r} has {len(classes)} class(es) "
+                                 f"({', '.join(classes)}); a classifier needs at least 2")
+        heads.append(HeadSpec(target.name, target.kind, target.source, target.weight, classes))
+    return heads
+
+
+def _natural(s: str) -> tuple[int, float, str]:
+    try:
+        return (0, float(s), s)
+    except ValueError:
+        return (1, 0.0, s)
+
+
+def _sample_classes(name: str, trials: Sequence[TrialSeries]) -> tuple[str, ...]:
+    found: tuple[str, ...] | None = None
+    first = None
+    for t in trials:
+        classes = t.classes.get(name)
+        if classes is None:
+            top = int(t.sample_labels[name].max(initial=-1))
+            classes = tuple(str(i) for i in range(top + 1))
+        if found is None:
+            found, first = classes, t
+        elif classes != found and t.classes.get(name) is not None:
+            raise InputError(f"label {name!r} has classes {list(classes)} here but "
+                             f"{list(found)} in {first.key if first else '?'}; the files "
+                             "must use the same classes", path=t.file, where=f"/trials/{t.trial}")
+    return found or ()
+
+
+def _trial_value(trial: TrialSeries, name: str) -> Any:
+    if name not in trial.trial_labels:
+        raise InputError(f"no trial label {name!r} (labels: "
+                         f"{', '.join(trial.trial_labels) or 'none'}); fix data.targets",
+                         path=trial.file, where=f"/trials/{trial.trial}/labels")
+    return trial.trial_labels[name]
+
+
+def check_heads_match(heads: Sequence[HeadSpec], trials: Sequence[TrialSeries]) -> None:
+    """Raise when evaluation data use other class names than the run's heads."""
+    for head in heads:
+        if head.kind != "classification" or head.source != "sample":
+            continue
+        for t in trials:
+            classes = t.classes.get(head.name)
+            if classes is not None and classes != head.classes:
+                raise InputError(f"label {head.name!r} has classes {list(classes)}; the run "
+                                 f"was trained on {list(head.classes)}", path=t.file,
+                                 where=f"/trials/{t.trial}")
+
+
+def per_sample_targets(trial: TrialSeries, heads: Sequence[HeadSpec]) -> dict[str, np.ndarray]:
+    """name -> (n,) target per sample: int64 class index (-1 unlabelled) or float64 value."""
+    n = trial.x.shape[0]
+    out: dict[str, np.ndarray] = {}
+    for head in heads:
+        if head.source == "sample":
+            values = trial.sample_labels[head.name]
+            if values.shape != (n,):
+                raise InputError(f"label {head.name!r} has {values.shape[0]} values for {n} "
+                                 "samples", path=trial.file, where=f"/trials/{trial.trial}")
+            if head.kind == "classification":
+                values = values.astype(np.int64)
+                if values.max(initial=-1) >= len(head.classes):
+                    raise InputError(f"label {head.name!r} holds class index "
+                                     f"{int(values.max())} but has {len(head.classes)} classes",
+                                     path=trial.file, where=f"/trials/{trial.trial}")
+            else:
+                values = values.astype(np.float64)
+            out[head.name] = values
+            continue
+        value = _trial_value(trial, head.name)
+        if head.kind == "classification":
+            if str(value) not in head.classes:
+                raise InputError(f"trial label {head.name}={value!r} is not one of the run's "
+                                 f"classes ({', '.join(head.classes)})", path=trial.file,
+                                 where=f"/trials/{trial.trial}/labels")
+            out[head.name] = np.full(n, head.classes.index(str(value)), dtype=np.int64)
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise InputError(f"trial label {head.name}={value!r} is not a number; a "
+                                 "regression target must be numeric", path=trial.file,
+                                 where=f"/trials/{trial.trial}/labels") from None
+            out[head.name] = np.full(n, number, dtype=np.float64)
+    return out
+
+
+# -- splits ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SplitAssignment:
+    """Which split each trial belongs to, and how that was decided."""
+
+    splits: tuple[str, ...]  # one of SPLITS per trial, in the order of the trials
+    mode: str  # "attribute" or "random"
+
+    def indices(self, split: str) -> list[int]:
+        return [i for i, s in enumerate(self.splits) if s == split]
+
+    def counts(self) -> dict[str, int]:
+        return {s: self.splits.count(s) for s in SPLITS}
+
+
+def assign_splits(trials: Sequence[TrialSeries], split: SplitConfig, seed: int
+                  ) -> SplitAssignment:
+    """Assign whole trials to train/val/test.
+
+    ``attribute`` uses each trial's ``split`` attribute; ``random`` ranks the trials by a
+    hash of (seed, file name, trial name) and gives the first ``round(test_fraction n)``
+    to test, the next ``round(val_fraction n)`` to val (at least one each when the
+    fraction is > 0) and the rest to train: the same files and seed give the same split,
+    whatever order the files are given in. ``auto`` is ``attribute`` when every trial has
+    a split attribute and ``random`` when none has.
+    """
+    attrs = [t.split_attr for t in trials]
+    mode = split.mode
+    if mode == "auto":
+        if all(a in SPLITS for a in attrs):
+            mode = "attribute"
+        elif all(a == "" for a in attrs):
+            mode = "random"
+        else:
+            t = next(t for t in trials if t.split_attr not in SPLITS)
+            raise InputError("some trials have a split attribute and this one has none; set "
+                             "data.split.mode to attribute or random", path=t.file,
+                             where=f"/trials/{t.trial}")
+    if mode == "attribute":
+        for t in trials:
+            if t.split_attr not in SPLITS:
+                raise InputError(f"split attribute is {t.split_attr!r}, not one of "
+                                 f"{', '.join(SPLITS)}; set data.split.mode: random",
+                                 path=t.file, where=f"/trials/{t.trial}")
+        return SplitAssignment(tuple(attrs), "attribute")
+    n = len(trials)
+    split_seed = seed if split.seed is None else split.seed
+
+    def rank(t: TrialSeries) -> str:
+        return hashlib.sha256(f"{split_seed}|{t.key}".encode()).hexdigest()
+
+    order = sorted(range(n), key=lambda i: (rank(trials[i]), trials[i].file))
+
+    def count(fraction: float) -> int:
+        return 0 if fraction <= 0 else max(1, round(fraction * n))
+
+    n_test, n_val = count(split.test_fraction), count(split.val_fraction)
+    if n - n_test - n_val < 1:
+        raise InputError(f"{n} trial(s) cannot be split into {n_val} val and {n_test} test "
+                         "trial(s) with at least one left for training; give more trials or "
+                         "lower data.split.val_fraction / test_fraction")
+    out = ["train"] * n
+    for pos, i in enumerate(order):
+        if pos < n_test:
+            out[i] = "test"
+        elif pos < n_test + n_val:
+            out[i] = "val"
+    return SplitAssignment(tuple(out), "random")
+
+
+# -- normalisation ---------------------------------------------------------------------------
+@dataclass
+class Normalisation:
+    """Per-channel standardisation ``(f(x) - mean) / std`` and regression-target scaling.
+
+    f is ``transform`` (see :func:`transform_samples`). mean, std: (c,) float64 of f(x)
+    over the training trials' samples (padding excluded); a channel
+    with zero or non-finite spread gets std 1. ``targets``: regression head name ->
+    (mean, std) of its training targets. ``features``: the MLP's summary-feature mean and
+    std (also inside the model's state dict), for the record.
+    """
+
+    channels: list[str]
+    mean: np.ndarray
+    std: np.ndarray
+    n_samples: int
+    enabled: bool = True
+    transform: str = "none"
+    targets: dict[str, tuple[float, float]] = field(default_factory=dict)
+    features: dict[str, list[float]] | None = None
+
+    def apply(self, x: np.ndarray) -> np.ndarray:
+        """(n, c) samples in sensor units -> (n, c) float32, transformed and standardised."""
+        y = transform_samples(x, self.transform)
+        if not self.enabled:
+            return y.astype(np.float32)
+        return ((y - self.mean) / self.std).astype(np.float32)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "format": "tactile-normalisation", "format_version": 1,
+            "enabled": self.enabled, "transform": self.transform,
+            "channels": list(self.channels),
+            "mean": [float(v) for v in self.mean], "std": [float(v) for v in self.std],
+            "n_samples": int(self.n_samples),
+            "targets": {k: {"mean": m, "std": s} for k, (m, s) in self.targets.items()},
+            "features": self.features,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Normalisation:
+        return cls(
+            channels=list(d["channels"]), mean=np.asarray(d["mean"], dtype=np.float64),
+            std=np.asarray(d["std"], dtype=np.float64), n_samples=int(d["n_samples"]),
+            enabled=bool(d["enabled"]), transform=str(d["transform"]),
+            targets={k: (float(v["mean"]), float(v["std"])) for k, v in d["targets"].items()},
+            features=d.get("features"),
+        )
+
+    def to_json(self) -> str:
+        return json.dumps(self.as_dict(), indent=2)
+
+
+def transform_samples(x: np.ndarray, transform: str) -> np.ndarray:
+    """(n, c) -> (n, c) float64: ``none`` or ``signed_log1p`` (``sign(x) log(1 + |x|)``)."""
+    y = np.asarray(x, dtype=np.float64)
+    if transform == "none":
+        return y
+    if transform == "signed_log1p":
+        return np.sign(y) * np.log1p(np.abs(y))
+    raise ValueError(f"`transform` (={transform!r}) must be none or signed_log1p")
+
+
+def fit_normalisation(train: Sequence[TrialSeries], channels: Sequence[str], *,
+                      enabled: bool = True, transform: str = "none") -> Normalisation:
+    """Per-channel mean and std over every (transformed) sample of the training trials."""
+    if not train:
+        raise InputError("no training trials to take normalisation statistics from")
+    x = transform_samples(np.concatenate([t.x for t in train], axis=0), transform)
+    mean = x.mean(axis=0)
+    std = x.std(axis=0)
+    std = np.where(np.isfinite(std) & (std > 0), std, 1.0)
+    return Normalisation(list(channels), mean, std, int(x.shape[0]), enabled, transform)
+
+
+# -- windows ---------------------------------------------------------------------------------
+@dataclass
+class WindowSet:
+    """Windows of several trials without copies.
+
+    x: (n_total, c) float32 normalised samples of all trials back to back (each trial
+    preceded by its padding); starts: (n_windows,) index into x of each window's first
+    sample. targets: head name -> (n_windows,) int64 class index or float32 value
+    (regression values standardised when the normalisation has target statistics).
+    trial_index: (n_windows,) index into ``trials``; end_index: (n_windows,) index of the
+    window's last sample within its trial; target_index: the sample the target belongs to;
+    target_t_s: its time in seconds. near_boundary: sample-classification head name ->
+    (n_windows,) bool, the target sample lies within ``boundary_margin`` samples of a label
+    change.
+    """
+
+    x: np.ndarray
+    starts: np.ndarray
+    window: int
+    targets: dict[str, np.ndarray]
+    trial_index: np.ndarray
+    end_index: np.ndarray
+    target_index: np.ndarray
+    target_t_s: np.ndarray
+    near_boundary: dict[str, np.ndarray]
+    trials: list[str]  # TrialSeries.key of each trial
+
+    def __len__(self) -> int:
+        return int(self.starts.shape[0])
+
+    @property
+    def n_channels(self) -> int:
+        return int(self.x.shape[1])
+
+    def windows(self, idx: np.ndarray | slice | None = None) -> np.ndarray:
+        """(k, window, c) float32 windows ``idx`` (all when None)."""
+        starts = self.starts if idx is None else self.starts[idx]
+        return self.x[starts[:, None] + np.arange(self.window)]
+
+    def subset(self, mask: np.ndarray) -> WindowSet:
+        """The windows where ``mask`` (n_windows,) is true (sharing ``x``)."""
+        return WindowSet(self.x, self.starts[mask], self.window,
+                         {k: v[mask] for k, v in self.targets.items()}, self.trial_index[mask],
+                         self.end_index[mask], self.target_index[mask], self.target_t_s[mask],
+                         {k: v[mask] for k, v in self.near_boundary.items()}, self.trials)
+
+
+def window_ends(n_samples: int, data: DataConfig) -> np.ndarray:
+    """(k,) index (within the trial) of the last sample of each window of a trial of
+    ``n_samples`` samples: every ``stride`` samples from the first sample that has a full
+    window (``window - 1`` unpadded, ``label_delay`` padded)."""
+    first = data.label_delay if data.pad != "none" else data.window - 1
+    return np.arange(first, n_samples, data.stride, dtype=np.int64)
+
+
+def _near_change(labels: np.ndarray, margin: int) -> np.ndarray:
+    """(n,) bool: the labels within ``margin`` samples of each sample are not all equal."""
+    n = labels.shape[0]
+    change = np.zeros(n + 1, dtype=np.int64)  # change[i + 1]: labels[i] != labels[i + 1]
+    change[2:] = np.cumsum(labels[1:] != labels[:-1])
+    # changes between samples j - margin .. j + margin: pairs (i, i + 1) with i in
+    # [j - margin, j + margin - 1]
+    j = np.arange(n)
+    lo = np.clip(j - margin, 0, n - 1)
+    hi = np.clip(j + margin, 0, n - 1)
+    return (change[hi + 1] - change[lo + 1]) > 0
+
+
+def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequence[HeadSpec],
+                 norm: Normalisation) -> WindowSet:
+    """Cut trials into windows with one target per head (see the module docstring)."""
+    w = data.window
+    pad = w - 1 if data.pad != "none" else 0
+    xs, starts, trial_idx, ends, tgt_idx, tgt_t = [], [], [], [], [], []
+    targets: dict[str, list[np.ndarray]] = {h.name: [] for h in heads}
+    near: dict[str, list[np.ndarray]] = {
+        h.name: [] for h in heads if h.kind == "classification" and h.source == "sample"}
+    offset = 0
+    for i, trial in enumerate(trials):
+        n = trial.x.shape[0]
+        raw = trial.x
+        if pad:
+            filler = np.zeros((pad, raw.shape[1]), np.float32) if data.pad == "zero" \
+                else np.repeat(raw[:1], pad, axis=0)
+            raw = np.concatenate([filler, raw], axis=0) if n else raw[:0]
+        xs.append(norm.apply(raw))
+        e = window_ends(n, data)
+        per_sample = per_sample_targets(trial, heads)
+        keep = np.ones(e.shape[0], dtype=bool)
+        values: dict[str, np.ndarray] = {}
+        for head in heads:
+            lab = per_sample[head.name]
+            if data.label_rule == "last" or head.source == "trial":
+                v = lab[e - data.label_delay]
+            elif head.kind == "classification":
+                v = _majority(lab, e, w, len(head.classes))
+            else:
+                v = _window_mean(lab, e, w)
+            keep &= (v >= 0) if head.kind == "classification" else np.isfinite(v)
+            values[head.name] = v
+        e = e[keep]
+        target = e - data.label_delay
+        for head in heads:
+            v = values[head.name][keep]
+            if head.kind == "regression" and head.name in norm.targets:
+                m, s = norm.targets[head.name]
+                v = (v - m) / s
+            targets[head.name].append(v.astype(np.int64 if head.kind == "classification"
+                                               else np.float32))
+            if head.name in near:
+                near[head.name].append(_near_change(per_sample[head.name],
+                                                    data.boundary_margin)[target])
+        starts.append(offset + e + pad - (w - 1))
+        trial_idx.append(np.full(e.shape[0], i, dtype=np.int64))
+        ends.append(e)
+        tgt_idx.append(target)
+        tgt_t.append(trial.t_s[target])
+        offset += n + pad if n else 0
+
+    def cat(parts: list[np.ndarray], dtype: Any) -> np.ndarray:
+        return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype)
+
+    c = len(data.channels)
+    return WindowSet(
+        x=np.concatenate(xs, axis=0) if xs else np.zeros((0, c), np.float32),
+        starts=cat(starts, np.int64), window=w,
+        targets={k: cat(v, np.int64 if any(h.name == k and h.kind == "classification"
+                                           for h in heads) else np.float32)
+                 for k, v in targets.items()},
+        trial_index=cat(trial_idx, np.int64), end_index=cat(ends, np.int64),
+        target_index=cat(tgt_idx, np.int64), target_t_s=cat(tgt_t, np.float64),
+        near_boundary={k: cat(v, bool) for k, v in near.items()},
+        trials=[t.key for t in trials],
+    )
+
+
+def _majority(labels: np.ndarray, ends: np.ndarray, window: int, n_classes: int) -> np.ndarray:
+    """(k,) most frequent class among the labelled samples of each window (lowest index on
+    ties; -1 when no sample is labelled). Padding samples carry no label."""
+    n = labels.shape[0]
+    onehot = np.zeros((n, n_classes), dtype=np.int64)
+    valid = labels >= 0
+    onehot[np.flatnonzero(valid), labels[valid]] = 1
+    cum = np.concatenate([np.zeros((1, n_classes), np.int64), np.cumsum(onehot, axis=0)])
+    counts = cum[ends + 1] - cum[np.maximum(ends - window + 1, 0)]
+    out = counts.argmax(axis=1)
+    return np.where(counts.sum(axis=1) > 0, out, -1)
+
+
+def _window_mean(values: np.ndarray, ends: np.ndarray, window: int) -> np.ndarray:
+    cum = np.concatenate([[0.0], np.cumsum(values)])
+    lo = np.maximum(ends - window + 1, 0)
+    return (cum[ends + 1] - cum[lo]) / (ends + 1 - lo)
+
+
+def regression_stats(ws: WindowSet, heads: Sequence[HeadSpec]) -> dict[str, tuple[float, float]]:
+    """(mean, std) of each regression head's (unscaled) targets in ``ws``."""
+    out = {}
+    for head in heads:
+        if head.kind == "regression":
+            v = ws.targets[head.name].astype(np.float64)
+            std = float(v.std()) if v.size else 1.0
+            out[head.name] = (float(v.mean()) if v.size else 0.0,
+                              std if np.isfinite(std) and std > 0 else 1.0)
+    return out
+
+
+def class_weights(y: np.ndarray, n_classes: int) -> np.ndarray:
+    """(n_classes,) inverse-frequency weights ``n / (k n_c)`` over the k classes present
+    (a class absent from ``y`` gets 0), so that each present class counts equally."""
+    counts = np.bincount(y, minlength=n_classes).astype(np.float64)
+    present = counts > 0
+    out = np.zeros(n_classes)
+    out[present] = y.shape[0] / (present.sum() * counts[present])
+    return out
+
+
+def summary_features(windows: np.ndarray, names: Sequence[str] = SUMMARY_FEATURES
+                     ) -> np.ndarray:
+    """(k, w, c) windows -> (k, len(names) * c) summary features, feature-major (numpy
+    reference of the MLP's in-model feature layer)."""
+    x = np.asarray(windows, dtype=np.float64)
+    w = x.shape[1]
+    idx = np.arange(w, dtype=np.float64) - (w - 1) / 2
+    denom = float((idx**2).sum()) or 1.0
+    funcs = {
+        "mean": lambda: x.mean(axis=1), "std": lambda: x.std(axis=1),
+        "min": lambda: x.min(axis=1), "max": lambda: x.max(axis=1),
+        "last": lambda: x[:, -1], "slope": lambda: np.einsum("kwc,w->kc", x, idx) / denom,
+    }
+    return np.concatenate([funcs[n]() for n in names], axis=1).astype(np.float32)
+
+
+__all__ = ["SPLITS", "Normalisation", "SplitAssignment", "TrialSeries",
+           "WindowSet", "assign_splits", "check_heads_match", "class_weights",
+           "fit_normalisation", "make_windows", "per_sample_targets", "read_trials",
+           "regression_stats", "resolve_heads", "summary_features", "transform_samples",
+           "window_ends"]

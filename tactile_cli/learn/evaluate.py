@@ -1,0 +1,313 @@
+"""``tactile evaluate``: metrics, confusion matrices and latency of a trained run.
+
+For every classification head: overall accuracy, per-class precision, recall and F1 (the
+form of paper 000, Table I), macro F1, the confusion matrix (rows true, columns
+predicted), and, for per-sample labels, the accuracy without the windows whose target
+lies within ``boundary_margin`` samples of a label change (a causal window at a
+transition is ambiguous for a sample or two; the plain accuracy stays the headline). For
+every regression head: MAE and RMSE in the label's own units. Cost on this machine:
+latency per window at batch 1 (median, 95th percentile), windows per second at a large
+batch, parameter count and model size.
+
+Results go to ``RUN/eval/<name>/`` (see :mod:`.runs`): ``metrics.json`` (format
+``tactile-eval`` 1; the fields later commands read: ``accuracy``, ``heads``,
+``latency``, ``model``), a PNG and a JSON confusion matrix per classification head and
+``predictions.csv`` (one row per window).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import InputError
+from ..store.writer import current_command, sha256_of, utc_now
+from . import runs
+from .data import (
+    WindowSet,
+    assign_splits,
+    check_heads_match,
+    make_windows,
+    read_trials,
+)
+from .figures import plot_confusion
+from .heads import HeadSpec
+from .latency import LatencyStats, measure_latency
+from .models import count_parameters, state_size_bytes
+from .train import predict
+
+
+@dataclass(frozen=True)
+class ClassMetrics:
+    name: str
+    precision: float
+    recall: float
+    f1: float
+    support: int
+
+
+@dataclass
+class ClassificationMetrics:
+    """Table I of paper 000 for one head, plus the confusion matrix (rows: true class,
+    columns: predicted class; it sums to ``n``)."""
+
+    head: str
+    classes: list[str]
+    n: int
+    accuracy: float
+    macro_f1: float
+    per_class: list[ClassMetrics]
+    confusion_matrix: list[list[int]]
+    boundary_margin: int | None = None
+    n_near_boundary: int | None = None
+    accuracy_excluding_boundaries: float | None = None
+    kind: str = "classification"
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass
+class RegressionMetrics:
+    """Mean absolute and root-mean-square error in the label's units."""
+
+    head: str
+    n: int
+    mae: float
+    rmse: float
+    kind: str = "regression"
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def classification_metrics(y_true: np.ndarray, y_pred: np.ndarray, classes: Sequence[str], *,
+                           head: str = "", near_boundary: np.ndarray | None = None,
+                           boundary_margin: int | None = None) -> ClassificationMetrics:
+    """Accuracy, per-class P/R/F1 and confusion matrix of class indices (n,) each.
+
+    A class never predicted has precision 0, one never present recall 0 (and F1 0)."""
+    k = len(classes)
+    y_true = np.asarray(y_true, dtype=np.int64)
+    y_pred = np.asarray(y_pred, dtype=np.int64)
+    cm = np.bincount(y_true * k + y_pred, minlength=k * k).reshape(k, k)
+    tp = np.diag(cm).astype(np.float64)
+    predicted, actual = cm.sum(axis=0), cm.sum(axis=1)
+    precision = np.divide(tp, predicted, out=np.zeros(k), where=predicted > 0)
+    recall = np.divide(tp, actual, out=np.zeros(k), where=actual > 0)
+    denom = precision + recall
+    f1 = np.divide(2 * precision * recall, denom, out=np.zeros(k), where=denom > 0)
+    n = int(y_true.shape[0])
+    per_class = [ClassMetrics(str(c), float(precision[i]), float(recall[i]), float(f1[i]),
+                              int(actual[i])) for i, c in enumerate(classes)]
+    out = ClassificationMetrics(
+        head=head, classes=[str(c) for c in classes], n=n,
+        accuracy=float(tp.sum() / n) if n else math.nan,
+        macro_f1=float(f1[actual > 0].mean()) if (actual > 0).any() else math.nan,
+        per_class=per_class, confusion_matrix=cm.tolist())
+    if near_boundary is not None:
+        keep = ~np.asarray(near_boundary, dtype=bool)
+        out.boundary_margin = boundary_margin
+        out.n_near_boundary = int((~keep).sum())
+        out.accuracy_excluding_boundaries = (
+            float((y_true[keep] == y_pred[keep]).mean()) if keep.any() else math.nan)
+    return out
+
+
+def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray, *, head: str = ""
+                       ) -> RegressionMetrics:
+    err = np.asarray(y_pred, dtype=np.float64) - np.asarray(y_true, dtype=np.float64)
+    n = int(err.shape[0])
+    return RegressionMetrics(head, n, float(np.abs(err).mean()) if n else math.nan,
+                             float(np.sqrt((err**2).mean())) if n else math.nan)
+
+
+@dataclass
+class EvalResult:
+    """Everything ``tactile evaluate`` reports (``as_dict`` is metrics.json)."""
+
+    run: str
+    family: str
+    name: str
+    split: str
+    data: list[dict[str, Any]]
+    overlaps_training: list[str]
+    n_trials: int
+    n_windows: int
+    heads: list[ClassificationMetrics | RegressionMetrics]
+    n_params: int
+    size_mb: float
+    file_size_bytes: int
+    latency: LatencyStats | None
+    out_dir: Path
+    command: str = ""
+    created_utc: str = ""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def accuracy(self) -> float | None:
+        """Accuracy of the primary (first classification) head."""
+        return next((h.accuracy for h in self.heads
+                     if isinstance(h, ClassificationMetrics)), None)
+
+    def as_dict(self) -> dict[str, Any]:
+        primary = next((h for h in self.heads if isinstance(h, ClassificationMetrics)), None)
+        return {
+            "format": runs.EVAL_FORMAT, "format_version": runs.EVAL_FORMAT_VERSION,
+            "tool_version": __version__, "created_utc": self.created_utc,
+            "command": self.command, "run": self.run, "family": self.family,
+            "name": self.name, "split": self.split, "data": self.data,
+            "overlaps_training": self.overlaps_training,
+            "n_trials": self.n_trials, "n_windows": self.n_windows,
+            "primary_head": None if primary is None else primary.head,
+            "accuracy": self.accuracy,
+            "accuracy_excluding_boundaries": None if primary is None
+            else primary.accuracy_excluding_boundaries,
+            "heads": {h.head: h.as_dict() for h in self.heads},
+            "latency": None if self.latency is None else self.latency.as_dict(),
+            "model": {"n_params": self.n_params, "size_mb": self.size_mb,
+                      "file_size_bytes": self.file_size_bytes},
+            **self.extra,
+        }
+
+
+def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: WindowSet,
+                 targets_scale: dict[str, tuple[float, float]], boundary_margin: int
+                 ) -> tuple[list[ClassificationMetrics | RegressionMetrics],
+                            dict[str, np.ndarray]]:
+    """Metrics of every head and the decoded predictions (class index or value)."""
+    metrics: list[ClassificationMetrics | RegressionMetrics] = []
+    decoded: dict[str, np.ndarray] = {}
+    for head in heads:
+        out = outputs[head.name]
+        if head.kind == "classification":
+            pred = out.argmax(axis=1)
+            decoded[head.name] = pred
+            metrics.append(classification_metrics(
+                ws.targets[head.name], pred, head.classes, head=head.name,
+                near_boundary=ws.near_boundary.get(head.name),
+                boundary_margin=boundary_margin if head.name in ws.near_boundary else None))
+        else:
+            m, s = targets_scale.get(head.name, (0.0, 1.0))
+            pred = out.astype(np.float64) * s + m
+            true = ws.targets[head.name].astype(np.float64) * s + m
+            decoded[head.name] = pred
+            metrics.append(regression_metrics(true, pred, head=head.name))
+    return metrics, decoded
+
+
+def evaluate(
+    run_dir: str | Path,
+    data_paths: Sequence[str | Path],
+    *,
+    split: Literal["all", "test"] = "all",
+    name: str | None = None,
+    latency: bool = True,
+    threads: int | None = None,
+    command: str | None = None,
+) -> EvalResult:
+    """Evaluate a run on data files and write ``RUN/eval/<name>/`` (replacing an earlier
+    evaluation of the same name).
+
+    ``split="test"`` keeps the trials the run's split rule (the same config and seed)
+    assigns to test, which on the training files are exactly the training's test trials;
+    ``"all"`` uses every trial. ``threads`` (default 1) is the torch thread count of the
+    latency measurement.
+    """
+    run = runs.load_run(run_dir)
+    paths = [Path(p) for p in data_paths]
+    if not paths:
+        raise InputError("no data files; give --data FILE")
+    for p in paths:
+        if not p.is_file():
+            raise InputError("data file not found", path=p)
+    if split not in ("all", "test"):
+        raise InputError(f"--split must be all or test, got {split!r}")
+    cfg = run.config
+    trials = read_trials(paths, cfg.data)
+    check_heads_match(run.heads, trials)
+    if split == "test":
+        assignment = assign_splits(trials, cfg.data.split, cfg.seed)
+        trials = [trials[i] for i in assignment.indices("test")]
+        if not trials:
+            raise InputError("no trial of these files is in the test split (the run's config "
+                             f"has test_fraction {cfg.data.split.test_fraction}); use "
+                             "--split all for data the run never saw")
+    ws = make_windows(trials, cfg.data, run.heads, run.normalisation)
+    if len(ws) == 0:
+        raise InputError(f"the data give no windows (window {cfg.data.window} samples); "
+                         "are the trials shorter than the window?")
+    model = run.load_model()
+    outputs = predict(model, ws)
+    metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
+                                    cfg.data.boundary_margin)
+    lat = None
+    if latency:
+        rng = np.random.default_rng(0)
+        pick = rng.choice(len(ws), size=min(len(ws), 2048), replace=False)
+        lat = measure_latency(model, ws.windows(np.sort(pick)), threads=threads)
+    hashes = [sha256_of(p) for p in paths]
+    trained_on = {d["sha256"] for d in run.info.get("data", [])}
+    name = name or runs.eval_dir_name(paths, split)
+    out_dir = run.path / runs.EVAL_DIR / name
+    result = EvalResult(
+        run=str(run.path), family=cfg.model.family, name=name, split=split,
+        data=[{"path": str(p), "sha256": h, "n_trials": sum(1 for t in trials
+                                                            if t.file == str(p))}
+              for p, h in zip(paths, hashes, strict=True)],
+        overlaps_training=[str(p) for p, h in zip(paths, hashes, strict=True)
+                           if h in trained_on],
+        n_trials=len(trials), n_windows=len(ws), heads=metrics,
+        n_params=count_parameters(model), size_mb=state_size_bytes(model) / 1e6,
+        file_size_bytes=(run.path / runs.MODEL_PT).stat().st_size, latency=lat,
+        out_dir=out_dir, command=command if command is not None else current_command(),
+        created_utc=utc_now(),
+    )
+    _write(result, run.heads, ws, decoded, run.normalisation.targets)
+    return result
+
+
+def _write(result: EvalResult, heads: Sequence[HeadSpec], ws: WindowSet,
+           decoded: dict[str, np.ndarray], scale: dict[str, tuple[float, float]]) -> None:
+    def fill(tmp: Path) -> None:
+        runs.write_json(tmp / runs.METRICS_JSON, result.as_dict())
+        for m in result.heads:
+            if isinstance(m, ClassificationMetrics):
+                cm = np.asarray(m.confusion_matrix)
+                plot_confusion(cm, m.classes, tmp / f"confusion_{m.head}.png",
+                               title=f"{result.family} {m.head}: accuracy "
+                                     f"{100 * m.accuracy:.2f} % ({m.n:,} windows)")
+                (tmp / f"confusion_{m.head}.json").write_text(json.dumps(
+                    {"head": m.head, "classes": m.classes, "rows": "true", "columns": "predicted",
+                     "matrix": m.confusion_matrix}, indent=2) + "\n", encoding="utf-8")
+        with open(tmp / runs.PREDICTIONS_CSV, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f)
+            cols = ["trial", "end_index", "target_index", "target_t_s"]
+            for h in heads:
+                cols += [f"{h.name}_true", f"{h.name}_pred"]
+            w.writerow(cols)
+            trial_keys = np.asarray(ws.trials, dtype=object)[ws.trial_index]
+            columns: list[np.ndarray] = [trial_keys, ws.end_index, ws.target_index,
+                                         np.round(ws.target_t_s, 6)]
+            for h in heads:
+                if h.kind == "classification":
+                    classes = np.asarray(h.classes, dtype=object)
+                    columns += [classes[ws.targets[h.name]], classes[decoded[h.name]]]
+                else:
+                    m, s = scale.get(h.name, (0.0, 1.0))
+                    columns += [ws.targets[h.name].astype(np.float64) * s + m, decoded[h.name]]
+            w.writerows(zip(*columns, strict=True))
+
+    runs.write_folder(result.out_dir, fill, overwrite=True)
+
+
+__all__ = ["ClassMetrics", "ClassificationMetrics", "EvalResult", "RegressionMetrics",
+           "classification_metrics", "evaluate", "head_metrics", "regression_metrics"]

@@ -1,0 +1,369 @@
+"""``tactile train``: fit a network of the registry to windows of tactile HDF5 files.
+
+:func:`train` validates, reads the data (:mod:`.data`), splits by trial, takes the
+normalisation from the training split, trains with early stopping on the validation
+split and writes a run folder (:mod:`.runs`). Seeded and deterministic on the CPU: the
+seed fixes the split, the initial weights, the batch order and dropout;
+``torch.use_deterministic_algorithms(True)`` and a fixed thread count make two runs with
+the same seed, data and machine give identical weights (the previous torch settings are
+restored afterwards).
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import math
+import platform
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from .._version import __version__
+from ..errors import InputError
+from ..interrupt import raise_if_requested
+from ..store.writer import current_command, sha256_of, utc_now
+from . import runs
+from .config import TrainConfig
+from .data import (
+    Normalisation,
+    SplitAssignment,
+    TrialSeries,
+    WindowSet,
+    assign_splits,
+    class_weights,
+    fit_normalisation,
+    make_windows,
+    read_trials,
+    regression_stats,
+    resolve_heads,
+)
+from .figures import plot_curves
+from .heads import HeadSpec, primary_head
+from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
+
+
+@dataclass(frozen=True)
+class EpochRecord:
+    """One epoch: mean training loss, validation loss and primary-head accuracy (NaN
+    without a validation split), wall seconds, and whether it is the best so far."""
+
+    epoch: int
+    train_loss: float
+    val_loss: float
+    val_accuracy: float
+    seconds: float
+    best: bool
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass
+class Prepared:
+    """Trials, split, heads, normalisation and windows of one training data set."""
+
+    trials: list[TrialSeries]
+    assignment: SplitAssignment
+    heads: list[HeadSpec]
+    normalisation: Normalisation
+    windows: dict[str, WindowSet]  # split -> windows
+
+
+@dataclass
+class TrainResult:
+    """What ``tactile train`` reports; the run folder holds the rest."""
+
+    run_dir: Path
+    family: str
+    history: list[EpochRecord]
+    best_epoch: int
+    stopped_early: bool
+    n_params: int
+    size_mb: float
+    wall_time_s: float
+    train_time_s: float
+    threads: int
+    n_trials: dict[str, int]
+    n_windows: dict[str, int]
+    best_val_loss: float
+    best_val_accuracy: float
+    heads: list[HeadSpec] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["run_dir"] = str(self.run_dir)
+        out["history"] = [h.as_dict() for h in self.history]
+        out["heads"] = [h.as_dict() for h in self.heads]
+        return out
+
+
+@contextmanager
+def deterministic(seed: int, threads: int) -> Iterator[None]:
+    """Seed torch, turn on deterministic algorithms and fix the CPU thread count; restore
+    the previous settings on exit."""
+    previous = (torch.are_deterministic_algorithms_enabled(), torch.get_num_threads())
+    torch.manual_seed(seed)
+    torch.use_deterministic_algorithms(True)
+    torch.set_num_threads(threads)
+    try:
+        yield
+    finally:
+        torch.use_deterministic_algorithms(previous[0])
+        torch.set_num_threads(previous[1])
+
+
+def prepare(config: TrainConfig, data_paths: Sequence[Path]) -> Prepared:
+    """Read, split, normalise (training split only) and window the training data."""
+    d = config.data
+    trials = read_trials(data_paths, d)
+    assignment = assign_splits(trials, d.split, config.seed)
+    heads = resolve_heads(d.targets, trials)
+    by_split = {s: [trials[i] for i in assignment.indices(s)] for s in ("train", "val", "test")}
+    if not by_split["train"]:
+        raise InputError("no trial is in the train split (split attributes: "
+                         f"{assignment.counts()}); set data.split.mode: random")
+    norm = fit_normalisation(by_split["train"], d.channels, enabled=d.normalise,
+                             transform=d.transform)
+    train_ws = make_windows(by_split["train"], d, heads, norm)
+    if len(train_ws) == 0:
+        raise InputError(f"the training trials give no windows (window {d.window} samples, "
+                         f"pad {d.pad}); use a shorter data.window or data.pad: zero")
+    norm.targets = regression_stats(train_ws, heads)
+    for name, (m, s) in norm.targets.items():
+        train_ws.targets[name] = ((train_ws.targets[name] - m) / s).astype(np.float32)
+    windows = {"train": train_ws}
+    for s in ("val", "test"):
+        windows[s] = make_windows(by_split[s], d, heads, norm)
+    return Prepared(trials, assignment, heads, norm, windows)
+
+
+def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
+    return {k: torch.from_numpy(np.ascontiguousarray(v[idx])) for k, v in ws.targets.items()}
+
+
+def predict(model: nn.Module, ws: WindowSet, *, batch_size: int = 4096
+            ) -> dict[str, np.ndarray]:
+    """Raw outputs (logits or standardised values) of every window: head -> (n, k) / (n,)."""
+    model.eval()
+    outs: dict[str, list[np.ndarray]] = {}
+    with torch.inference_mode():
+        for lo in range(0, len(ws), batch_size):
+            idx = np.arange(lo, min(lo + batch_size, len(ws)))
+            for k, v in model(torch.from_numpy(ws.windows(idx))).items():
+                outs.setdefault(k, []).append(v.numpy())
+    return {k: np.concatenate(v) for k, v in outs.items()}
+
+
+def _validate(model: nn.Module, ws: WindowSet, heads: Sequence[HeadSpec],
+              weights: dict[str, torch.Tensor] | None, batch_size: int) -> tuple[float, float]:
+    """(loss, primary-head accuracy) on a window set; NaN when it is empty."""
+    if len(ws) == 0:
+        return math.nan, math.nan
+    outputs = {k: torch.from_numpy(v) for k, v in predict(model, ws, batch_size=batch_size)
+               .items()}
+    targets = batch_targets(ws, np.arange(len(ws)))
+    with torch.inference_mode():
+        loss = float(multitask_loss(outputs, targets, heads, weights).total)
+    head = primary_head(heads)
+    acc = math.nan
+    if head is not None:
+        acc = float((outputs[head.name].argmax(dim=1) == targets[head.name]).double().mean())
+    return loss, acc
+
+
+def _set_feature_stats(model: MultiTaskNet, ws: WindowSet, norm: Normalisation) -> None:
+    """MLP: standardise the summary features with training-window statistics."""
+    summary = getattr(model.trunk, "summary", None)
+    if summary is None:
+        return
+    feats = []
+    with torch.inference_mode():
+        for lo in range(0, len(ws), 8192):
+            idx = np.arange(lo, min(lo + 8192, len(ws)))
+            feats.append(summary.raw(torch.from_numpy(ws.windows(idx))).double())
+    f = torch.cat(feats)
+    mean, std = f.mean(dim=0), f.std(dim=0, correction=0)
+    std = torch.where(torch.isfinite(std) & (std > 0), std, torch.ones_like(std))
+    summary.feature_mean.copy_(mean.float())
+    summary.feature_std.copy_(std.float())
+    norm.features = {"names": list(summary.features), "mean": mean.tolist(),
+                     "std": std.tolist()}
+
+
+def train(
+    config: TrainConfig,
+    data_paths: Sequence[str | Path],
+    out: str | Path,
+    *,
+    config_path: str | Path | None = None,
+    overwrite: bool = False,
+    command: str | None = None,
+    on_epoch: Callable[[EpochRecord], None] | None = None,
+    on_start: Callable[[Prepared], None] | None = None,
+) -> TrainResult:
+    """Train ``config`` on ``data_paths`` and write the run folder ``out``.
+
+    ``on_start`` is called once the data are ready, ``on_epoch`` after every epoch (for
+    progress display). Returns the summary; raises :class:`InputError` for bad data.
+    """
+    started = time.perf_counter()
+    out = Path(out)
+    if out.exists() and not overwrite:
+        raise InputError("output folder exists; pass --overwrite to replace it", path=out)
+    paths = [Path(p) for p in data_paths]
+    if not paths:
+        raise InputError("no data files; give --data FILE")
+    for p in paths:
+        if not p.is_file():
+            raise InputError("data file not found", path=p)
+    opt_cfg = config.optim
+    threads = opt_cfg.threads
+    with deterministic(config.seed, threads):
+        prep = prepare(config, paths)
+        if on_start is not None:
+            on_start(prep)
+        d = config.data
+        torch.manual_seed(config.seed)
+        model = build_model(config.model, window=d.window, n_channels=len(d.channels),
+                            heads=prep.heads)
+        train_ws, val_ws = prep.windows["train"], prep.windows["val"]
+        _set_feature_stats(model, train_ws, prep.normalisation)
+        weights = None
+        if d.class_weights:
+            weights = {h.name: torch.tensor(class_weights(train_ws.targets[h.name],
+                                                          len(h.classes)), dtype=torch.float32)
+                       for h in prep.heads if h.kind == "classification"}
+        if opt_cfg.optimizer == "adam":
+            optim: torch.optim.Optimizer = torch.optim.Adam(
+                model.parameters(), lr=opt_cfg.lr, weight_decay=opt_cfg.weight_decay)
+        else:
+            optim = torch.optim.SGD(model.parameters(), lr=opt_cfg.lr,
+                                    momentum=opt_cfg.momentum,
+                                    weight_decay=opt_cfg.weight_decay)
+        schedule = None
+        if opt_cfg.lr_schedule == "cosine":
+            schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optim, T_max=opt_cfg.epochs)
+        gen = torch.Generator().manual_seed(config.seed)
+        history: list[EpochRecord] = []
+        best_state = copy.deepcopy(model.state_dict())
+        best_epoch, best_score, since_best = 0, math.inf, 0
+        stopped_early = False
+        train_started = time.perf_counter()
+        n = len(train_ws)
+        for epoch in range(1, opt_cfg.epochs + 1):
+            raise_if_requested()
+            t0 = time.perf_counter()
+            model.train()
+            order = torch.randperm(n, generator=gen).numpy()
+            total = 0.0
+            for lo in range(0, n, opt_cfg.batch_size):
+                idx = order[lo:lo + opt_cfg.batch_size]
+                outputs = model(torch.from_numpy(train_ws.windows(idx)))
+                loss = multitask_loss(outputs, batch_targets(train_ws, idx), prep.heads,
+                                      weights).total
+                optim.zero_grad(set_to_none=True)
+                loss.backward()
+                if opt_cfg.grad_clip:
+                    nn.utils.clip_grad_norm_(model.parameters(), opt_cfg.grad_clip)
+                optim.step()
+                total += float(loss.detach()) * idx.shape[0]
+            if not math.isfinite(total):
+                raise InputError(f"training diverged in epoch {epoch} (the loss is not finite); "
+                                 "lower optim.lr or set optim.grad_clip")
+            if schedule is not None:
+                schedule.step()
+            val_loss, val_acc = _validate(model, val_ws, prep.heads, weights,
+                                          opt_cfg.batch_size * 8)
+            if len(val_ws) == 0:
+                score = -epoch  # no validation: the last epoch is the best
+            elif opt_cfg.monitor == "val_loss":
+                score = val_loss
+            else:
+                score = -val_acc
+            improved = score < best_score or (best_epoch == 0 and not math.isfinite(score))
+            if improved:
+                best_score, best_epoch, since_best = score, epoch, 0
+                best_state = copy.deepcopy(model.state_dict())
+            else:
+                since_best += 1
+            record = EpochRecord(epoch, total / n, val_loss, val_acc, time.perf_counter() - t0,
+                                 improved)
+            history.append(record)
+            if on_epoch is not None:
+                on_epoch(record)
+            if opt_cfg.patience and len(val_ws) and since_best >= opt_cfg.patience:
+                stopped_early = epoch < opt_cfg.epochs
+                break
+        train_time = time.perf_counter() - train_started
+        model.load_state_dict(best_state)
+        model.eval()
+
+    best = history[best_epoch - 1]
+    n_params = count_parameters(model)
+    size_mb = state_size_bytes(model) / 1e6
+    n_trials = prep.assignment.counts()
+    n_windows = {s: len(ws) for s, ws in prep.windows.items()}
+    info = {
+        "format": runs.RUN_FORMAT,
+        "format_version": runs.RUN_FORMAT_VERSION,
+        "created_utc": utc_now(),
+        "command": command if command is not None else current_command(),
+        "config_file": None if config_path is None else str(config_path),
+        "versions": {"tactile": __version__, "torch": torch.__version__,
+                     "numpy": np.__version__, "python": platform.python_version(),
+                     "platform": platform.platform()},
+        "seed": config.seed,
+        "data": [{"path": str(p), "sha256": sha256_of(p), "size_bytes": p.stat().st_size,
+                  "n_trials": sum(1 for t in prep.trials if t.file == str(p))} for p in paths],
+        "heads": [h.as_dict() for h in prep.heads],
+        "class_weights": None if weights is None else {k: v.tolist()
+                                                       for k, v in weights.items()},
+        "split": {"mode": prep.assignment.mode, "trials": n_trials, "windows": n_windows},
+        "model": {"family": config.model.family, "n_params": n_params, "size_mb": size_mb,
+                  "window": d.window, "channels": list(d.channels), "stream": d.stream},
+        "training": {"epochs_run": len(history), "best_epoch": best_epoch,
+                     "stopped_early": stopped_early, "monitor": opt_cfg.monitor,
+                     "best_val_loss": best.val_loss, "best_val_accuracy": best.val_accuracy,
+                     "train_time_s": train_time, "threads": threads, "deterministic": True},
+    }
+    rows = [r.as_dict() for r in history]
+
+    def fill(tmp: Path) -> None:
+        torch.save(model.state_dict(), tmp / runs.MODEL_PT)
+        (tmp / runs.CONFIG_YAML).write_text(config.as_yaml(), encoding="utf-8")
+        (tmp / runs.NORMALISATION_JSON).write_text(prep.normalisation.to_json() + "\n",
+                                                   encoding="utf-8")
+        with open(tmp / runs.HISTORY_CSV, "w", newline="", encoding="utf-8") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+        plot_curves(rows, tmp / runs.CURVES_PNG, best_epoch=best_epoch,
+                    title=f"{config.model.family}: {out.name}")
+        with open(tmp / runs.SPLIT_CSV, "w", newline="", encoding="utf-8") as f:
+            writer = csv.writer(f)
+            writer.writerow(["file", "trial", "split"])
+            for t, s in zip(prep.trials, prep.assignment.splits, strict=True):
+                writer.writerow([t.file, t.trial, s])
+        info["wall_time_s"] = time.perf_counter() - started
+        runs.write_json(tmp / runs.RUN_JSON, info)
+
+    runs.write_folder(out, fill, overwrite=overwrite)
+    return TrainResult(
+        run_dir=out, family=config.model.family, history=history, best_epoch=best_epoch,
+        stopped_early=stopped_early, n_params=n_params, size_mb=size_mb,
+        wall_time_s=float(info["wall_time_s"]), train_time_s=train_time, threads=threads,
+        n_trials=n_trials, n_windows=n_windows, best_val_loss=best.val_loss,
+        best_val_accuracy=best.val_accuracy, heads=prep.heads,
+    )
+
+
+__all__ = ["EpochRecord", "Prepared", "TrainResult", "batch_targets", "deterministic",
+           "predict", "prepare", "train"]
