@@ -85,7 +85,6 @@ app.command("validate", help="Check HDF5 files against the tactile schema; list 
 app.command("frames", help="Event frames (PNG) and a contact sheet with ROIs, like Fig. 13.")(
     _frames.frames_command
 )
-)
 app.command("slip-rate", help="Slip speed and displacement from ROI event centroids (m/s, m).")(
     _slip_rate.slip_rate_command
 )
