@@ -13,7 +13,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: demo demo-events test ingest bench lint clean
+.PHONY: demo demo-events demo-learn test ingest bench lint clean
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -54,8 +54,23 @@ demo: $(STAMP)
 	$(TACTILE) validate $(DEMO)/h5/*.h5
 	for f in $(DEMO)/h5/*.h5; do $(TACTILE) info "$$f"; done
 	$(MAKE) --no-print-directory demo-events DEMO=$(DEMO)
-	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/report --max-trials 2
+	$(MAKE) --no-print-directory demo-learn DEMO=$(DEMO)
+	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
+	$(TACTILE) report $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --data $(DEMO)/h5/scene.h5 --figures $(DEMO)/events --figures $(DEMO)/quicklook --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
+
+# Four model families trained only on model-based trajectories (tactile synth) and evaluated
+# on the scene recordings they never saw (paper 000, Table I), compared by accuracy and cost.
+DEMO_FAMILIES := lstm cnn1d fnn mlp
+demo-learn: $(STAMP)
+	rm -rf $(DEMO)/runs
+	$(TACTILE) synth --n 240 --seed 1 --out $(DEMO)/h5/synth_train.h5 --overwrite
+	for m in $(DEMO_FAMILIES); do \
+	  $(TACTILE) train configs/train_$${m}_actions.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/$$m --no-progress || exit 1; \
+	  $(TACTILE) evaluate $(DEMO)/runs/$$m --data $(DEMO)/h5/scene.h5 || exit 1; \
+	done
+	$(TACTILE) compare $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --out $(DEMO)/compare
+	$(TACTILE) perturb $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --data $(DEMO)/h5/scene.h5 --out $(DEMO)/perturb
 
 # The event-sensor chain of paper 000 on a simulated marker-event scene with known ground
 # truth: simulate -> ingest (with the truth as annotations and labels) -> accumulate and

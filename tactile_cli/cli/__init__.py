@@ -12,13 +12,16 @@ import typer
 
 from .._version import __version__
 from . import accumulate as _accumulate
+from . import compare as _compare
 from . import evaluate as _evaluate
 from . import fit_fos as _fit_fos
 from . import frames as _frames
 from . import grade as _grade
 from . import info as _info
 from . import ingest as _ingest
+from . import perturb as _perturb
 from . import plot as _plot
+from . import report as _report
 from . import samples as _samples
 from . import simulate as _simulate
 from . import slip_rate as _slip_rate
@@ -102,6 +105,17 @@ app.command("train", context_settings=_MANY_FILES,
 app.command("evaluate", context_settings=_MANY_FILES,
             help="Accuracy, per-class P/R/F1, confusion matrix and latency of a trained run.")(
     _evaluate.evaluate_command
+)
+
+app.command("compare", help="Accuracy against latency of several runs, Pareto front and the "
+            "model the scene needs.")(_compare.compare_command)
+app.command("perturb", context_settings=_MANY_FILES,
+            help="Accuracy of runs on perturbed copies of the data, with breaking points.")(
+    _perturb.perturb_command
+)
+app.command("report", context_settings=_MANY_FILES,
+            help="One self-contained HTML page of runs, comparison and data files.")(
+    _report.report_command
 )
 
 

@@ -38,6 +38,18 @@ def evaluate_command(
         bool, typer.Option("--latency/--no-latency", help="Measure latency and throughput.")
     ] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
+    perturb: Annotated[
+        bool, typer.Option("--perturb", help="Also re-evaluate on perturbed copies of the data "
+                           "(see `tactile perturb`); results in RUN/perturb/<name>/.")
+    ] = False,
+    perturb_kinds: Annotated[
+        str, typer.Option("--perturb-kinds", help="Kinds for --perturb: noise, lowpass, drop, "
+                          "drop_events, drop_samples, scale (comma-separated).")
+    ] = "noise,lowpass,drop,scale",
+    threshold: Annotated[
+        str, typer.Option(help="--perturb breaking point: accuracy below a factor of the clean "
+                          "accuracy (0.9x) or an accuracy (0.95 or 95%).")
+    ] = "0.9x",
 ) -> None:
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
@@ -56,10 +68,22 @@ def evaluate_command(
             raise InputError("no data files; give --data FILE...")
         if split not in ("all", "test"):
             raise InputError(f"--split must be all or test, got {split!r}")
+        if perturb:
+            from .perturb import parse_threshold
+
+            parse_threshold(threshold)  # a bad value fails before any work
         result = evaluate(run, files, split=split, name=name,  # type: ignore[arg-type]
                           latency=latency, threads=threads)
         if as_json:
-            typer.echo(dumps(result.as_dict()))
+            payload = result.as_dict()
+            if perturb:
+                from .perturb import perturb_and_print
+
+                perturbed = perturb_and_print([run], files, kinds=perturb_kinds,
+                                              threshold=threshold, split=split, name=name,
+                                              echo=False)
+                payload = {"evaluation": payload, "perturbation": perturbed[0].as_dict()}
+            typer.echo(dumps(payload))
         else:
             console = Console(width=None if sys.stdout.isatty() else 120)
             console.print(f"[bold]{result.run}[/] ({result.family}) on {result.n_trials} "
@@ -93,6 +117,11 @@ def evaluate_command(
                          "" if lat is None else str(lat.threads))
             console.print(cost)
             console.print(f"wrote {result.out_dir}")
+            if perturb:
+                from .perturb import perturb_and_print
+
+                perturb_and_print([run], files, kinds=perturb_kinds, threshold=threshold,
+                                  split=split, name=name)
         if result.overlaps_training and split == "all":
             print(f"tactile: warning: {', '.join(result.overlaps_training)} was used to train "
                   "this run; these metrics include training trials (use --split test)",

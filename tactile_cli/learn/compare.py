@@ -215,8 +215,11 @@ def eval_names(run_dir: Path) -> list[str]:
 
 def check_run_folder(path: Path) -> Path:
     """``path`` if it is a run folder (has run.json), else an InputError saying so."""
+    if path.is_file():
+        raise InputError("is a file, not a run folder (give the folder `tactile train` "
+                         "wrote)", path=path)
     if not path.is_dir():
-        raise InputError("run folder not found (give a folder `tactile train` wrote)",
+        raise InputError("run folder not found (give the folder `tactile train` wrote)",
                          path=path)
     if not (path / runs.RUN_JSON).is_file():
         raise InputError("not a run folder (no run.json); train one with `tactile train`",
@@ -277,7 +280,7 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
     return float(value)
 
 
-def _labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
+def run_labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
     """``family/<folder name>``; ``family/<parent>/<folder>`` where folder names repeat."""
     names = [d.resolve().name for d in run_dirs]
     out = []
@@ -382,7 +385,7 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
             raise InputError(f"run.json is not valid JSON ({exc})",
                              path=d / runs.RUN_JSON) from None
         families.append(str(info.get("model", {}).get("family", "?")))
-    labels = _labels(dirs, families)
+    labels = run_labels(dirs, families)
     points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
     _check_same_data(points)
     cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name)
@@ -427,7 +430,7 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
 
     fams = sorted({p.family for p in cmp.points})
     colour = {f: f"C{i % 10}" for i, f in enumerate(fams)}
-    fig, ax = plt.subplots(figsize=(8.5, 5.2))
+    fig, ax = plt.subplots(figsize=(10.5, 5.2))
     timed = [p for p in cmp.points if p.latency_ms is not None and p.latency_ms > 0]
     for fam in fams:
         pts = [p for p in timed if p.family == fam]
@@ -476,7 +479,7 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
     if missing:
         fig.text(0.01, 0.01, "no latency measured (not drawn): " + ", ".join(missing),
                  fontsize=7)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, metadata={"Software": f"tactile {__version__}"})
@@ -524,5 +527,5 @@ def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | Non
 __all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "ComparisonFiles",
            "RunPoint", "check_run_folder", "choose_data_name", "compare", "compare_points",
            "comparison_record", "eval_names", "pareto_front", "pick_fastest", "pick_needed",
-           "plot_comparison", "read_point", "table_rows", "within_margin", "write_atomic",
-           "write_comparison"]
+           "plot_comparison", "read_point", "run_labels", "table_rows", "within_margin",
+           "write_atomic", "write_comparison"]

@@ -612,6 +612,21 @@ def perturb_evaluate(
 
 
 # -- outputs ---------------------------------------------------------------------------------
+def level_text(kind: KindResult, level: float | None) -> str:
+    """A level as people read it: ``10 dB``, ``0.125 x Nyquist (3.12 Hz)``, ``30 %``,
+    ``x1.5``; empty for None."""
+    if level is None:
+        return ""
+    if kind.kind == "noise":
+        return f"{level:g} dB"
+    if kind.kind == "lowpass":
+        hz = next((lv.cutoff_hz for lv in kind.levels if lv.level == level), None)
+        return f"{level:g} x Nyquist" + ("" if hz is None else f" ({hz:.3g} Hz)")
+    if kind.kind.startswith("drop_"):
+        return f"{100 * level:g} %"
+    return f"x{level:g}"
+
+
 def perturbation_rows(results: Sequence[PerturbResult]) -> list[dict[str, Any]]:
     """One row per run, kind and level (accuracy in %), clean rows first."""
     rows = []
@@ -701,10 +716,14 @@ def plot_perturbations(results: Sequence[PerturbResult]) -> bytes:
         ax.set_visible(False)
     use_hz = all(r.sample_rate_hz is not None for r in results) and \
         len({r.sample_rate_hz for r in results}) == 1
+    # one colour per family (as in the compare chart) when every run is of another family
+    fams = [r.family for r in results]
+    order = sorted(set(fams))
+    colours = [f"C{order.index(f) % 10}" for f in fams] if len(order) == len(fams) \
+        else [f"C{i % 10}" for i in range(len(results))]
     for ax, kind in zip(axes.flat, kinds, strict=False):
         title, xlabel = kind, kind
-        for i, r in enumerate(results):
-            colour = f"C{i % 10}"
+        for r, colour in zip(results, colours, strict=True):
             try:
                 k = r.kind(kind)
             except KeyError:
@@ -759,7 +778,7 @@ def plot_perturbations(results: Sequence[PerturbResult]) -> bytes:
 __all__ = ["DEFAULT_KINDS", "DEFAULT_LEVELS", "KINDS", "PERTURB_CSV", "PERTURB_DIR",
            "PERTURB_JSON", "PERTURB_PNG", "BreakPoint", "Direction", "KindResult",
            "LevelResult", "PerturbResult", "add_noise", "breaking_index", "directions",
-           "drop_samples", "find_perturbations", "load_perturbation", "lowpass",
+           "drop_samples", "find_perturbations", "level_text", "load_perturbation", "lowpass",
            "lowpass_cutoffs", "perturb_evaluate", "perturb_trial", "perturbation_rows",
            "plot_perturbations", "resolve_kinds", "scale_time", "thin_counts",
            "write_perturbation", "write_perturbation_set"]

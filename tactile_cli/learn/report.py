@@ -38,9 +38,16 @@ from .._version import __version__
 from ..errors import InputError, TactileError
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
-from .compare import check_run_folder, compare, eval_names, plot_comparison, table_rows, \
-    write_atomic
-from .perturb import find_perturbations, load_perturbation, plot_perturbations
+from .compare import (
+    check_run_folder,
+    compare,
+    eval_names,
+    plot_comparison,
+    run_labels,
+    table_rows,
+    write_atomic,
+)
+from .perturb import find_perturbations, level_text, load_perturbation, plot_perturbations
 
 INDEX_HTML = "index.html"
 REPORT_JSON = "report.json"
@@ -199,9 +206,9 @@ def _perturbation_sections(run_dirs: Sequence[Path], inputs: _Inputs) -> tuple[s
                 for b in k.breaking:
                     rows.append((r.label, k.kind, b.direction,
                                  "none within the levels" if b.level is None
-                                 else _fmt(b.level),
+                                 else level_text(k, b.level),
                                  "" if b.accuracy is None else f"{100 * b.accuracy:.2f}",
-                                 _fmt(b.last_ok), f"{100 * r.clean_accuracy:.2f}",
+                                 level_text(k, b.last_ok), f"{100 * r.clean_accuracy:.2f}",
                                  f"{100 * r.threshold:.2f} ({r.threshold_rule})"))
         parts.append(
             f"<h3>{_e(name)}</h3>"
@@ -421,9 +428,7 @@ def build_report(
         except json.JSONDecodeError as exc:
             raise InputError(f"run.json is not valid JSON ({exc})",
                              path=d / runs.RUN_JSON) from None
-    from .compare import _labels
-
-    labels = _labels(dirs, families)
+    labels = run_labels(dirs, families)
     cmp_html, compared = _comparison_sections(dirs, margin_pp, metric, notes)
     pert_html, perturbed = _perturbation_sections(dirs, inputs)
     run_html = "".join(_run_section(d, lab, inputs) for d, lab in zip(dirs, labels,

@@ -1,0 +1,88 @@
+"""`tactile compare RUN... [--data-name NAME] [--margin 0.5] [--metric accuracy] [--out DIR]
+[--json]`"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._errors import run_guarded
+
+
+def runs_and_files(paths: list[Path] | None, data: list[Path] | None) -> tuple[list[Path],
+                                                                              list[Path]]:
+    """Split positional paths into run folders and data files: a run is a folder, so a
+    positional path that is a file is a data file (``--data a.h5 b.h5`` leaves ``b.h5``
+    among the positional arguments)."""
+    runs, files = [], list(data or [])
+    for p in paths or []:
+        (files if p.is_file() else runs).append(p)
+    return runs, files
+
+
+def compare_command(
+    runs: Annotated[
+        list[Path], typer.Argument(help="Run folders written by `tactile train`, each evaluated "
+                                   "with `tactile evaluate` on the same data.",
+                                   metavar="RUN", show_default=False)],
+    data_name: Annotated[
+        str | None,
+        typer.Option("--data-name", help="Evaluation to compare (RUN/eval/<name>); default: "
+                     "the one every run has.", show_default=False),
+    ] = None,
+    margin: Annotated[
+        float, typer.Option(min=0.0, help="Accuracy margin in percentage points: the model "
+                            "this scene needs is the smallest within it of the best.")
+    ] = 0.5,
+    metric: Annotated[
+        str, typer.Option(help="Score to compare: accuracy, macro_f1 or f1:<class> (e.g. "
+                          "f1:slip) of the primary head.")
+    ] = "accuracy",
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="Folder for compare.png (accuracy against latency, "
+                     "Pareto front), compare.csv and compare.json.", show_default=False),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print compare.json to stdout.")
+                       ] = False,
+) -> None:
+    """Compare runs on one evaluation: accuracy against latency per window (batch 1), the
+    Pareto front, and the model this scene needs (the fewest parameters within --margin
+    of the best accuracy, ties by latency) beside the fastest within the margin."""
+
+    def body() -> None:
+        from rich.console import Console
+        from rich.table import Table
+
+        from ..learn.compare import compare, comparison_record, table_rows, write_comparison
+        from ..learn.runs import dumps
+
+        cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric)
+        files = write_comparison(cmp, out) if out is not None else None
+        if as_json:
+            typer.echo(dumps(comparison_record(cmp)))
+            return
+        console = Console(width=None if sys.stdout.isatty() else 140)
+        table = Table(title=f"{cmp.metric_label} against cost on {cmp.data_name}")
+        for col in ("run", f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms",
+                    "p95 ms", "windows/s", "parameters", "MB", "Pareto", "in margin", ""):
+            table.add_column(col, justify="left" if col == "run" else "right")
+        for row in table_rows(cmp):
+            lat = row["latency_ms_median"]
+            table.add_row(
+                row["label"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
+                "" if lat is None else f"{lat:.3f}",
+                "" if row["latency_ms_p95"] is None else f"{row['latency_ms_p95']:.3f}",
+                "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
+                f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
+                "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
+                "needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
+        console.print(table)
+        typer.echo(cmp.summary())
+        if files is not None:
+            typer.echo(f"wrote {files.png}, {files.csv.name}, {files.json.name}")
+
+    run_guarded(body)

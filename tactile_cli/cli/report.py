@@ -1,0 +1,65 @@
+"""`tactile report RUN... --out DIR [--data FILE...] [--figures DIR...]`"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import run_guarded
+from .compare import runs_and_files
+
+
+def report_command(
+    ctx: typer.Context,
+    runs: Annotated[
+        list[Path] | None,
+        typer.Argument(help="Run folders written by `tactile train`. A path that is a file is "
+                       "taken as a data file (so `--data *.h5` works).", metavar="RUN",
+                       show_default=False),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="Folder for index.html and report.json.",
+                     show_default=False),
+    ] = None,
+    data: Annotated[
+        list[Path] | None,
+        typer.Option("--data", "-d", help="Tactile HDF5 file(s) to summarise.",
+                     show_default=False),
+    ] = None,
+    figures: Annotated[
+        list[Path] | None,
+        typer.Option("--figures", help="Folder whose PNG files (recursively) are added, "
+                     "captioned with their paths; repeatable.", show_default=False),
+    ] = None,
+    title: Annotated[str | None, typer.Option(help="Page title.", show_default=False)] = None,
+    margin: Annotated[
+        float, typer.Option(min=0.0, help="Accuracy margin (percentage points) of the "
+                            "comparison.")
+    ] = 0.5,
+    metric: Annotated[
+        str, typer.Option(help="Score of the comparison: accuracy, macro_f1 or f1:<class>.")
+    ] = "accuracy",
+) -> None:
+    """Write one self-contained HTML page (figures embedded) with the comparison, the
+    perturbation charts, every run's config, curves, metrics, confusion matrices and cost,
+    the data files' summaries and extra figures. Prints the path of index.html."""
+
+    def body() -> None:
+        from ..learn.report import build_report
+
+        if out is None:
+            raise InputError("give the output folder with --out DIR")
+        extra = [Path(a) for a in ctx.args]
+        for a in ctx.args:
+            if a.startswith("-"):
+                raise InputError(f"unknown option {a!r}; see --help")
+        run_dirs, files = runs_and_files([*(runs or []), *extra], data)
+        result = build_report(run_dirs, out, data_paths=files, figure_dirs=figures or [],
+                              title=title, margin_pp=margin, metric=metric)
+        typer.echo(str(result.index))
+
+    run_guarded(body)
