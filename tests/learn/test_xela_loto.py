@@ -1,0 +1,49 @@
+"""benchmarks/xela_loto.py on the real Xela recordings: 1 family x 2 folds x 1 epoch."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+from tests.conftest import shared_path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _module():
+    spec = importlib.util.spec_from_file_location("xela_loto", ROOT / "benchmarks/xela_loto.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["xela_loto"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_wilson_interval_known_value() -> None:
+    lo, hi = _module().wilson(5, 10)
+    assert abs(lo - 0.2366) < 1e-4 and abs(hi - 0.7634) < 1e-4
+
+
+def test_loto_quick_run_writes_pooled_metrics(tmp_path: Path) -> None:
+    source = shared_path("xela_slip")
+    mod = _module()
+    rc = mod.main(["--source", str(source), "--families", "mlp", "--folds", "2",
+                   "--epochs", "1", "--out", str(tmp_path)])
+    assert rc == 0
+    rec = json.loads((tmp_path / "xela_loto.json").read_text())
+    assert (tmp_path / "xela_loto.png").stat().st_size > 10_000
+    assert len(rec["data"]["trials"]) == 7 and len(rec["folds"]) == 2
+    (fam,) = rec["families"]
+    assert fam["family"] == "mlp" and fam["n_params"] > 0
+    p = fam["pooled"]
+    folds = fam["per_trial"]
+    assert [t["trial"] for t in folds] == rec["folds"]
+    assert p["n"] == sum(t["n_steps"] for t in folds) == p["tp"] + p["fp"] + p["fn"] + p["tn"]
+    # the first two trials (2022-02-21) hold no slip step
+    assert p["tp"] + p["fn"] == 0
+    assert sum(map(sum, p["confusion_matrix"])) == p["n"]
+    assert p["accuracy"] == (p["tp"] + p["tn"]) / p["n"]
+    assert fam["latency"]["batch1_ms_median"] > 0
+    assert set(fam["bootstrap_over_trials95"]) >= {"f1", "accuracy"}
