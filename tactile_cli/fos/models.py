@@ -32,9 +32,8 @@ fitter exploits (variable projection: :mod:`tactile_cli.fos.fit`).
 
 from __future__ import annotations
 
-from typing import Any, Literal
-
 import sys
+from typing import Any, Literal
 
 import numpy as np
 
