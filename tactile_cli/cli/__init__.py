@@ -12,6 +12,7 @@ import typer
 
 from .._version import __version__
 from . import accumulate as _accumulate
+from . import centroids as _centroids
 from . import compare as _compare
 from . import evaluate as _evaluate
 from . import fit_fos as _fit_fos
@@ -87,6 +88,9 @@ app.command("validate", help="Check HDF5 files against the tactile schema; list 
 
 app.command("frames", help="Event frames (PNG) and a contact sheet with ROIs, like Fig. 13.")(
     _frames.frames_command
+)
+app.command("centroids", help="ROI centroid trajectories (eq. 19) as a stream for train/evaluate.")(
+    _centroids.centroids_command
 )
 app.command("slip-rate", help="Slip speed and displacement from ROI event centroids (m/s, m).")(
     _slip_rate.slip_rate_command

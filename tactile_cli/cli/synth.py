@@ -1,4 +1,4 @@
-"""`tactile synth --out FILE [--fits FILE.h5]`"""
+"""`tactile synth --out FILE [--fits FILE.h5] [--centroids ROIS.yaml]`"""
 
 from __future__ import annotations
 
@@ -19,6 +19,11 @@ def synth_command(
         help="Tactile file with /derived/fits/fos_press and fos_slip (from `tactile fit-fos`): "
              "parameters are drawn per force level from its converged fits. Without it, from "
              "the config's fos section (the paper's values).", show_default=False)] = None,
+    centroids: Annotated[Path | None, typer.Option(
+        help="ROI config (configs/rois_marker_scene.yaml or a scene's scene.json): also write "
+             "each trial's model-based ROI centroid trajectories as the stream roi_centroids "
+             "(the config's centroids section; paper 000, sec. 5.2).",
+        show_default=False)] = None,
     n: Annotated[int, typer.Option("--n", min=1, help="Number of trials.")] = 500,
     seed: Annotated[int, typer.Option(min=0, help="Random seed (same seed, same trials).")] = 0,
     config: Annotated[Path | None, typer.Option(
@@ -41,13 +46,15 @@ def synth_command(
     def body() -> None:
         from ..synth import load_synth_config, synthesize
 
-        if fits is not None and not fits.is_file():
-            raise InputError("file not found", path=fits)
+        for given in (fits, centroids):
+            if given is not None and not given.is_file():
+                raise InputError("file not found", path=given)
         cfg = load_synth_config(config).with_bin_s(None if bin_ms is None else bin_ms / 1000)
         with RichProgress(enabled=progress) as bar:
             result = synthesize(out, n=n, seed=seed, config=cfg, fits=fits,
-                                overwrite=overwrite, progress=bar)
+                                overwrite=overwrite, progress=bar, centroids=centroids)
         source = f"fits in {fits}" if fits is not None else "the config's fos section"
-        typer.echo(f"wrote {result.path}: {result.n} trials, parameters from {source}")
+        extra = "" if centroids is None else f", ROI centroids from {centroids}"
+        typer.echo(f"wrote {result.path}: {result.n} trials, parameters from {source}{extra}")
 
     run_guarded(body)

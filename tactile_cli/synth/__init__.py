@@ -9,7 +9,10 @@ action sequences with random timings and initial conditions. This package does t
   (``/derived/fits/fos_press``, ``fos_slip``, written by ``tactile fit-fos``) or from the
   config (the paper's values);
 - :mod:`.trajectories`: the random trials (timeline, expected counts, noise, labels);
-- :mod:`.write`: the HDF5 output (an ``event_counts`` stream per trial).
+- :mod:`.centroids`: ROI centroid trajectories of the same trials (``--centroids``, the
+  spatial-temporal classifier's features, sec. 5.2);
+- :mod:`.write`: the HDF5 output (an ``event_counts`` stream per trial, and a
+  ``roi_centroids`` stream with ``--centroids``).
 """
 
 from __future__ import annotations
@@ -18,7 +21,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..errors import InputError
 from ..progress import Progress
+from .centroids import CentroidModel as CentroidModel
+from .centroids import CentroidTrajectory as CentroidTrajectory
+from .centroids import draw_centroids as draw_centroids
 from .config import SynthConfig as SynthConfig
 from .config import load_synth_config as load_synth_config
 from .params import LevelDistribution as LevelDistribution
@@ -51,13 +58,17 @@ def synthesize(
     overwrite: bool = False,
     command: str | None = None,
     progress: Progress | None = None,
+    centroids: str | Path | None = None,
 ) -> SynthResult:
     """Draw ``n`` trials (deterministic for a ``seed``) and write them to ``out``.
 
     ``fits``: a tactile file with ``/derived/fits/fos_press`` and ``fos_slip`` (the
     parameter distributions come from its converged fits and its trials' force_level
-    labels); None: from ``config.fos``.
+    labels); None: from ``config.fos``. ``centroids``: an ROI config (YAML, or a scene's
+    ``scene.json``) with ROIs and optics; every trial then also gets ROI centroid
+    trajectories (:mod:`.centroids`, the ``centroids`` section of the config).
     """
+    model = None if centroids is None else centroid_model(centroids, config)
     if fits is not None:
         press, slip, grades = from_fits(fits, config)
     else:
@@ -67,15 +78,43 @@ def synthesize(
         "fits": None if fits is None else str(fits),
         "distributions": {"press": press.summary(), "slip": slip.summary()},
         "force_grades": {str(k): v for k, v in sorted(grades.items())},
+        "centroids": None if model is None else {"rois_config": str(centroids),
+                                                 **model.as_dict()},
     }
     trials = generate_trials(n, seed=seed, config=config, press=press, slip=slip,
-                             grades=grades)
+                             grades=grades, centroids=model)
     path = write_synth(out, trials, n=n, bin_s=config.bin_s, width_px=config.width_px,
                        height_px=config.height_px, provenance=provenance, fits_path=fits,
-                       command=command, overwrite=overwrite, progress=progress)
+                       command=command, overwrite=overwrite, progress=progress,
+                       centroids=model, centroids_path=centroids)
     return SynthResult(path=path, n=n, press=press, slip=slip)
 
 
-__all__ = ["LevelDistribution", "SynthConfig", "SynthResult", "SynthTrial", "draw_trial",
+def centroid_model(rois: str | Path, config: SynthConfig) -> CentroidModel:
+    """The centroid model of ``config`` for the ROIs and optics of the ROI config ``rois``
+    (YAML or a scene's scene.json); InputError when it has no ROIs or optics, or its ROIs
+    leave the config's ``width_px`` x ``height_px`` sensor."""
+    from ..spatial.config import load_config
+
+    spatial = load_config(rois)
+    if not spatial.rois:
+        raise InputError("the ROI config lists no ROIs; --centroids needs them under `rois:`",
+                         path=rois)
+    if spatial.optics is None:
+        raise InputError("the ROI config has no `optics` (pixel_pitch_m, focal_length_m, "
+                         "strip_distance_m); --centroids needs them to turn slip speeds in m/s "
+                         "into px/s (eq. 15)", path=rois)
+    spatial.check_sensor(config.width_px, config.height_px)
+    if abs(spatial.centroid.bin_s - config.bin_s) > 1e-12:
+        raise InputError(f"the ROI config's centroid.bin_s (={spatial.centroid.bin_s:g}) differs "
+                         f"from the synth bin_s (={config.bin_s:g}); `tactile centroids` would "
+                         "bin recordings otherwise than the model was trained on: make them "
+                         "equal", path=rois)
+    return CentroidModel(spatial.rois, spatial.optics, config.width_px, config.height_px,
+                         config.centroids, config.noise.opposite_fraction)
+
+
+__all__ = ["CentroidModel", "CentroidTrajectory", "LevelDistribution", "SynthConfig",
+           "SynthResult", "SynthTrial", "centroid_model", "draw_centroids", "draw_trial",
            "from_config", "from_fits", "generate_trials", "load_synth_config",
            "noisy_net_counts", "synthesize", "write_synth"]

@@ -11,7 +11,7 @@ A range ``[low, high]`` is drawn uniformly per trial (``low == high`` fixes it).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -185,6 +185,32 @@ class SaturationConfig(_Model):
         return value
 
 
+class CentroidsConfig(_Model):
+    """The model of the ROI centroid trajectories that ``tactile synth --centroids ROIS``
+    adds (tactile_cli/synth/centroids.py; the ROIs and optics come from the ROIS file).
+    Ranges are drawn per trial."""
+
+    speeds_m_s: Range = (0.001, 0.006)
+    """Slip speed, m/s, uniform; px/s through the optics of eqs. 3 and 15."""
+    direction_y: Literal[-1, 1] = -1
+    """The strips move towards smaller (-1) or larger (+1) y during the slip (paper Fig. 23:
+    negative slope)."""
+    band_height_px: Range = (30.0, 50.0)
+    """Height of the bright band of strip events, px; events are uniform over it."""
+    rest_inset_px: Range = (15.0, 35.0)
+    """Band centre at rest: this far inside the ROI edge the slip moves away from, px."""
+    roi_fraction: Range = (0.8, 1.0)
+    """Share of the positive signal events that land in the ROIs (split evenly)."""
+
+    @field_validator("speeds_m_s", "band_height_px", "rest_inset_px", "roi_fraction")
+    @classmethod
+    def _ranges(cls, value: Range, info: Any) -> Range:
+        _range(info.field_name, value)
+        if info.field_name == "roi_fraction" and value[1] > 1:
+            raise ValueError(f"`roi_fraction` (={list(value)}) must lie in (0, 1]")
+        return value
+
+
 class SynthConfig(_Model):
     """Everything ``tactile synth`` draws from (see configs/synth_fos.yaml)."""
 
@@ -200,6 +226,8 @@ class SynthConfig(_Model):
     noise: NoiseConfig = NoiseConfig()
     initial: InitialConfig = InitialConfig()
     saturation: SaturationConfig = SaturationConfig()
+    centroids: CentroidsConfig = CentroidsConfig()
+    """Used with ``--centroids ROIS`` only."""
 
     def with_bin_s(self, bin_s: float | None) -> SynthConfig:
         """A copy with ``bin_s`` replaced (None keeps it)."""
@@ -273,5 +301,5 @@ def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
     return line
 
 
-__all__ = ["FitsConfig", "FosConfig", "InitialConfig", "LevelsConfig", "NoiseConfig",
-           "SaturationConfig", "SynthConfig", "TimingConfig", "load_synth_config"]
+__all__ = ["CentroidsConfig", "FitsConfig", "FosConfig", "InitialConfig", "LevelsConfig",
+           "NoiseConfig", "SaturationConfig", "SynthConfig", "TimingConfig", "load_synth_config"]

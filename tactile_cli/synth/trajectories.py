@@ -21,7 +21,7 @@ One synthetic trial, drawn with its own random generator (child ``i`` of the see
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +32,7 @@ from ..fos.actions import (
     expected_net_counts,
     saturate,
 )
+from .centroids import CentroidModel, CentroidTrajectory, draw_centroids
 from .config import SynthConfig
 from .params import LevelDistribution
 
@@ -42,7 +43,8 @@ class SynthTrial:
 
     t_s: (n_bins,) bin centres, s. expected: (n_bins,) expected net events per bin.
     net: (n_bins,) float64 net events per bin with noise. labels: (n_bins,) int8 action
-    index per bin (into :data:`tactile_cli.fos.actions.ACTIONS`).
+    index per bin (into :data:`tactile_cli.fos.actions.ACTIONS`). centroids: the ROI
+    centroid trajectories (:mod:`tactile_cli.synth.centroids`) when requested, else None.
     """
 
     index: int
@@ -58,6 +60,7 @@ class SynthTrial:
     expected: np.ndarray
     net: np.ndarray
     labels: np.ndarray
+    centroids: CentroidTrajectory | None = None
 
     @property
     def name(self) -> str:
@@ -75,6 +78,8 @@ class SynthTrial:
         }
         if self.saturation_limit is not None:
             out["saturation_limit"] = self.saturation_limit
+        if self.centroids is not None:
+            out.update(self.centroids.label_attrs())
         return out
 
 
@@ -161,16 +166,29 @@ def generate_trials(
     press: LevelDistribution,
     slip: LevelDistribution,
     grades: Mapping[int, str] | None = None,
+    centroids: CentroidModel | None = None,
 ) -> Iterator[SynthTrial]:
     """Yield ``n`` synthetic trials; trial ``i`` uses child ``i`` of ``SeedSequence(seed)``,
-    so the same seed gives the same trials and a larger ``n`` only appends trials."""
+    so the same seed gives the same trials and a larger ``n`` only appends trials.
+
+    ``centroids``: also draw each trial's ROI centroid trajectories, from a generator of
+    its own (spawned from child ``i``), so the event counts are the same with and without.
+    """
     if n < 1:
         raise ValueError(f"`n` (={n}) must be at least 1.")
     if seed < 0:
         raise ValueError(f"`seed` (={seed}) must be >= 0.")
     for i, child in enumerate(np.random.SeedSequence(seed).spawn(n)):
-        yield draw_trial(i, np.random.default_rng(child), config=config, press=press,
-                         slip=slip, grades=grades or {})
+        trial = draw_trial(i, np.random.default_rng(child), config=config, press=press,
+                           slip=slip, grades=grades or {})
+        if centroids is not None:
+            tl = trial.timeline
+            trial = replace(trial, centroids=draw_centroids(
+                trial.t_s, trial.expected, bin_s=config.bin_s, slip_start_s=tl.slip_start_s,
+                release_start_s=tl.release_start_s, tau_press_s=trial.params.tau_press_s,
+                background_per_bin=trial.background_per_bin, model=centroids,
+                rng=np.random.default_rng(child.spawn(1)[0])))
+        yield trial
 
 
 __all__ = ["SynthTrial", "draw_trial", "generate_trials", "noisy_net_counts"]

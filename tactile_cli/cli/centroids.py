@@ -1,0 +1,66 @@
+"""`tactile centroids FILE --rois CFG --out OUT.h5`"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import run_guarded
+from .progress import RichProgress
+
+
+def centroids_command(
+    file: Annotated[Path, typer.Argument(help="A tactile HDF5 file with event trials.",
+                                         show_default=False)],
+    rois: Annotated[Path, typer.Option(
+        help="ROI config: YAML (configs/rois_marker_scene.yaml) or a scene's scene.json; its "
+             "centroid section sets polarity, median filter and bin width.",
+        show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.",
+                                      show_default=False)],
+    trial: Annotated[list[str] | None, typer.Option(
+        "--trial", "-t", help="Trial to convert; repeatable (default: every trial with "
+        "events).", show_default=False)] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
+                       ] = False,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
+                                         "terminal).", show_default=False)] = None,
+) -> None:
+    """ROI centroid trajectories (paper 000, sec. 5.2, eq. 19) as a signal stream for
+    `tactile train`/`evaluate`: per trial /trials/{t}/signals/roi_centroids with each ROI's
+    event-weighted centroid x, y (px) per bin, filled with the ROI centre and flagged 0 in
+    the ROI's <name>_has_events channel where it had no events, its event count, and
+    per-bin action labels from the annotations."""
+
+    def body() -> None:
+        from ..spatial.config import load_config
+        from ..spatial.provenance import provenance
+        from ..spatial.stream import write_centroid_file
+        from ..store.writer import current_command
+
+        if not file.exists():
+            raise InputError("file not found", path=file)
+        if out.exists() and not overwrite:
+            raise InputError("output exists; pass --overwrite to replace it", path=out)
+        config = load_config(rois)
+        record = provenance([file, rois], {"rois": config.as_dict(), "trials": trial or "all"})
+        with RichProgress(enabled=progress) as bar:
+            result = write_centroid_file(file, out, config, trials=trial,
+                                         command=current_command(), provenance=record,
+                                         overwrite=overwrite, progress=bar)
+        if as_json:
+            typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
+            return
+        measured = [t.measured_fraction for t in result.trials]
+        typer.echo(f"wrote {result.path}: {len(result.trials)} trial(s), "
+                   f"{len(result.rois)} ROI(s), {result.bin_s * 1e3:g} ms bins; centroids "
+                   f"measured in {100 * sum(measured) / len(measured):.1f} % of (bin, ROI) "
+                   "cells, the rest filled with the ROI centre")
+
+    run_guarded(body)
