@@ -2,8 +2,9 @@
 
 Issue 4, item 5. Each run's ``RUN/eval/<name>/metrics.json`` (written by ``tactile
 evaluate``, see :mod:`.evaluate`) gives its score on one evaluation data set and its cost
-on this machine. The runs must have been evaluated on the same data (the same files, by
-SHA-256, and the same split); :func:`compare` refuses to put other numbers side by side.
+on this machine. The runs must have been evaluated on the same recordings (the same files
+by SHA-256, or files derived from them such as ``tactile centroids`` streams, with the same
+trials and split); :func:`compare` refuses to put other numbers side by side.
 
 What is compared:
 
@@ -316,21 +317,35 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
         windows_per_s=lat.get("windows_per_s"), n_params=int(model.get("n_params", 0)),
         size_mb=float(model.get("size_mb", math.nan)), n_windows=int(m.get("n_windows", 0)),
         split=str(m.get("split", "")), primary_head=str(m["primary_head"]),
-        data=[{"path": d.get("path"), "sha256": d.get("sha256")} for d in m.get("data", [])],
+        data=[{k: d.get(k) for k in ("path", "sha256", "recordings_sha256", "n_trials")}
+              for d in m.get("data", [])],
         latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
     )
 
 
+def _recordings(data: Sequence[dict[str, Any]]) -> list[tuple[tuple[str, ...], int]]:
+    """Per data file: the recordings it holds (see
+    :func:`~tactile_cli.store.reader.recording_hashes`; older metrics files without them:
+    the file's own SHA-256) and its number of trials, sorted."""
+    return sorted((tuple(d.get("recordings_sha256") or [d["sha256"]]),
+                   int(d.get("n_trials") or 0)) for d in data)
+
+
 def _check_same_data(points: Sequence[RunPoint]) -> None:
+    """Refuse runs evaluated on other recordings (or other trials of them, or another
+    split). Two files hold the same recordings when they are the same file, or when one
+    is derived from the other's source (``tactile centroids`` turns a scene file into ROI
+    centroid streams: the spatial and the temporal models then score the same trials)."""
     ref = points[0]
-    ref_hashes = sorted(d["sha256"] for d in ref.data)
+    ref_recordings = _recordings(ref.data)
     for p in points[1:]:
-        if sorted(d["sha256"] for d in p.data) != ref_hashes:
+        if _recordings(p.data) != ref_recordings:
             raise InputError(
-                f"evaluation {p.eval_name!r} used other data files than {ref.run} "
+                f"evaluation {p.eval_name!r} used other recordings than {ref.run} "
                 f"({', '.join(str(d['path']) for d in p.data)} vs "
                 f"{', '.join(str(d['path']) for d in ref.data)}); evaluate every run on the "
-                "same files", path=p.metrics_path)
+                "same files, or on files derived from them (tactile centroids), with the "
+                "same trials", path=p.metrics_path)
         if p.split != ref.split:
             raise InputError(f"evaluation split is {p.split!r} here but {ref.split!r} in "
                              f"{ref.run}; evaluate every run with the same --split",

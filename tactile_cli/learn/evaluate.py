@@ -29,6 +29,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.reader import recording_hashes
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 from .data import (
@@ -260,8 +261,9 @@ def evaluate(
     out_dir = run.path / runs.EVAL_DIR / name
     result = EvalResult(
         run=str(run.path), family=cfg.model.family, name=name, split=split,
-        data=[{"path": str(p), "sha256": h, "n_trials": sum(1 for t in trials
-                                                            if t.file == str(p))}
+        data=[{"path": str(p), "sha256": h,
+               "recordings_sha256": recording_hashes(p, h),
+               "n_trials": sum(1 for t in trials if t.file == str(p))}
               for p, h in zip(paths, hashes, strict=True)],
         overlaps_training=[str(p) for p, h in zip(paths, hashes, strict=True)
                            if h in trained_on],

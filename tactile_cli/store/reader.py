@@ -171,3 +171,27 @@ def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
             "sensor": _plain(g.attrs["sensor"]),
             "sample_labels": labels,
         }
+
+
+#: Source-file suffixes that mark a file as derived from another tactile HDF5 file.
+TACTILE_SUFFIXES = (".h5", ".hdf5")
+
+
+def recording_hashes(path: str | Path, own_sha256: str) -> list[str]:
+    """The SHA-256 of the recordings a file holds, for "same data" checks.
+
+    A file written from other tactile HDF5 files (``tactile centroids`` turns a scene file
+    into ROI centroid streams) holds the same recordings as its sources, so its identity is
+    the sorted SHA-256 of those sources (``/provenance/sources`` rows whose path ends in
+    ``.h5``/``.hdf5``). Any other file (ingested from raw recordings, or made by ``tactile
+    synth``) is its own recording: ``[own_sha256]``.
+    """
+    check_readable(path)
+    with h5py.File(path, "r") as h5:
+        if "provenance/sources/path" not in h5:
+            return [own_sha256]
+        paths = [_plain(p) for p in h5["provenance/sources/path"][()]]
+        shas = [_plain(s) for s in h5["provenance/sources/sha256"][()]]
+    derived = sorted({s for p, s in zip(paths, shas, strict=True)
+                      if str(p).lower().endswith(TACTILE_SUFFIXES)})
+    return derived or [own_sha256]

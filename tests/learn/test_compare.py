@@ -42,7 +42,7 @@ def point(label: str, score: float, latency_ms: float | None, n_params: int) -> 
 
 
 def fake_run(root, name, family, *, accuracy, latency_ms, n_params, data_name="scene",
-             sha="a" * 64, split="all", f1_slip=0.5):
+             sha="a" * 64, split="all", f1_slip=0.5, recordings=None, n_trials=3):
     """A run folder with run.json and one hand-made eval/<data_name>/metrics.json."""
     run = root / name
     (run / "eval" / data_name).mkdir(parents=True)
@@ -50,7 +50,9 @@ def fake_run(root, name, family, *, accuracy, latency_ms, n_params, data_name="s
                                               "model": {"family": family}}))
     metrics = {
         "format": "tactile-eval", "format_version": 1, "family": family, "name": data_name,
-        "split": split, "data": [{"path": "scene.h5", "sha256": sha, "n_trials": 3}],
+        "split": split, "data": [{"path": "scene.h5", "sha256": sha, "n_trials": n_trials,
+                                       **({} if recordings is None else
+                                          {"recordings_sha256": recordings})}],
         "n_windows": 1000, "primary_head": "action", "accuracy": accuracy,
         "heads": {"action": {"head": "action", "kind": "classification", "n": 1000,
                              "accuracy": accuracy, "macro_f1": accuracy - 0.01,
@@ -151,11 +153,31 @@ def test_compare_by_f1_of_one_class(tmp_path):
         compare([a, b], metric="f1:grip")
 
 
+def test_compare_accepts_a_file_derived_from_the_same_recordings(tmp_path):
+    # the spatial run is evaluated on `tactile centroids scene.h5`'s output (another file,
+    # whose source is scene.h5 with sha "a"*64): same recordings, same trials, one chart
+    a = fake_run(tmp_path, "a", "lstm", accuracy=0.99, latency_ms=1.0, n_params=10)
+    s = fake_run(tmp_path, "s", "lstm", accuracy=0.98, latency_ms=0.5, n_params=10,
+                 sha="c" * 64, recordings=["a" * 64])
+    cmp = compare([a, s])
+    assert [p.accuracy for p in cmp.points] == [0.99, 0.98]
+
+
 def test_compare_refuses_different_data_and_ambiguous_evaluations(tmp_path):
     a = fake_run(tmp_path, "a", "lstm", accuracy=0.99, latency_ms=1.0, n_params=10)
     b = fake_run(tmp_path, "b", "fnn", accuracy=0.95, latency_ms=1.0, n_params=20, sha="b" * 64)
-    with pytest.raises(InputError, match="used other data files than"):
+    with pytest.raises(InputError, match="used other recordings than"):
         compare([a, b])
+    # a file derived from another recording (its sources) is not the same data either
+    b2 = fake_run(tmp_path, "b2", "fnn", accuracy=0.95, latency_ms=1.0, n_params=20,
+                  sha="c" * 64, recordings=["e" * 64])
+    with pytest.raises(InputError, match="used other recordings than"):
+        compare([a, b2])
+    # the same recordings, fewer trials of them (tactile centroids --trial): refused
+    b3 = fake_run(tmp_path, "b3", "fnn", accuracy=0.95, latency_ms=1.0, n_params=20,
+                  sha="c" * 64, recordings=["a" * 64], n_trials=2)
+    with pytest.raises(InputError, match="used other recordings than"):
+        compare([a, b3])
     c = fake_run(tmp_path, "c", "fnn", accuracy=0.95, latency_ms=1.0, n_params=20,
                  split="test")
     with pytest.raises(InputError, match="evaluation split is 'test' here but 'all'"):
