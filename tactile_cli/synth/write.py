@@ -83,13 +83,14 @@ def write_synth(
             tw.write_signal(STREAM, sensor=sensor, data=trial.net[:, None], t_s=trial.t_s,
                             sample_labels={"action": (trial.labels, ACTIONS)})
             if centroid_sensor is not None:
-                _write_centroids(tw, centroid_sensor, trial, centroids)
+                _write_centroids(tw, centroid_sensor, trial, centroids, bin_s)
             progress.advance()
         progress.finish()
         return w.commit()
 
 
-def _write_centroids(tw: Any, sensor: str, trial: SynthTrial, model: CentroidModel) -> None:
+def _write_centroids(tw: Any, sensor: str, trial: SynthTrial, model: CentroidModel,
+                     bin_s: float) -> None:
     from ..spatial.stream import STREAM as CENTROID_STREAM
     from ..spatial.stream import centroid_features
 
@@ -97,7 +98,9 @@ def _write_centroids(tw: Any, sensor: str, trial: SynthTrial, model: CentroidMod
     if c is None:
         raise ValueError(f"trial {trial.name} has no centroid trajectories to write")
     tw.write_signal(CENTROID_STREAM, sensor=sensor,
-                    data=centroid_features(c.centroid_px, c.weight, model.rois), t_s=trial.t_s,
+                    data=centroid_features(c.centroid_px, c.weight, model.rois,
+                                           bin_s=bin_s),
+                    t_s=trial.t_s,
                     sample_labels={"action": (trial.labels, ACTIONS)})
 
 

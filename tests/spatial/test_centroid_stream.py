@@ -19,6 +19,8 @@ from tactile_cli.fos.actions import ACTIONS
 from tactile_cli.spatial import Roi, roi_centroid_series
 from tactile_cli.spatial.stream import centroid_features, channel_names, channel_units
 from tactile_cli.store import validate_file
+from tactile_cli.store.reader import recording_hashes
+from tactile_cli.store.writer import sha256_of
 
 from .conftest import OPTICS, STRIP_ROIS, make_strip_events, write_trials
 
@@ -39,20 +41,28 @@ def _config(path: Path, **centroid) -> Path:
 def test_channels_and_filling_by_hand():
     rois = (Roi("a", 0, 0, 10, 20), Roi("b", 100, 50, 104, 60))
     assert channel_names(rois) == ["a_x", "a_y", "b_x", "b_y", "a_has_events",
-                                   "b_has_events", "a_events", "b_events"]
-    assert channel_units(rois) == ["px"] * 4 + ["1"] * 2 + ["events/bin"] * 2
+                                   "b_has_events", "a_events", "b_events", "a_vx", "a_vy",
+                                   "b_vx", "b_vy"]
+    assert channel_units(rois) == ["px"] * 4 + ["1"] * 2 + ["events/bin"] * 2 + ["px/s"] * 4
     nan = np.nan
-    c = np.array([[[3.0, 4.0], [nan, nan]], [[nan, nan], [101.0, 52.5]]])
-    w = np.array([[5.0, 0.0], [0.0, 2.0]])
-    out = centroid_features(c, w, rois)
+    c = np.array([[[3.0, 4.0], [nan, nan]], [[nan, nan], [101.0, 52.5]],
+                  [[3.5, 3.0], [101.2, 52.0]]])
+    w = np.array([[5.0, 0.0], [0.0, 2.0], [1.0, 4.0]])
+    out = centroid_features(c, w, rois, bin_s=0.02)
     assert out.dtype == np.float32
-    # empty cells get the ROI's pixel-centre middle: a (4.5, 9.5), b (101.5, 54.5)
-    np.testing.assert_array_equal(out, [[3, 4, 101.5, 54.5, 1, 0, 5, 0],
-                                        [4.5, 9.5, 101, 52.5, 0, 1, 0, 2]])
+    # empty cells get the ROI's pixel-centre middle: a (4.5, 9.5), b (101.5, 54.5); the
+    # velocity (eq. 20, px/s) is the difference of two measured centroids over 20 ms, and 0
+    # in the first bin and next to an empty cell (a in bins 1-2, b in bins 0-1)
+    np.testing.assert_allclose(out, [[3, 4, 101.5, 54.5, 1, 0, 5, 0, 0, 0, 0, 0],
+                                     [4.5, 9.5, 101, 52.5, 0, 1, 0, 2, 0, 0, 0, 0],
+                                     [3.5, 3, 101.2, 52, 1, 1, 1, 4, 0, 0, 10, -25]],
+                               rtol=1e-5)
     with pytest.raises(ValueError, match="NaN where its ROI has events"):
-        centroid_features(np.full((1, 2, 2), nan), np.ones((1, 2)), rois)
+        centroid_features(np.full((1, 2, 2), nan), np.ones((1, 2)), rois, bin_s=0.02)
     with pytest.raises(ValueError, match=r"must be \(n_bins, 2, 2\) and \(n_bins, 2\)"):
-        centroid_features(np.zeros((3, 1, 2)), np.zeros((3, 1)), rois)
+        centroid_features(np.zeros((3, 1, 2)), np.zeros((3, 1)), rois, bin_s=0.02)
+    with pytest.raises(ValueError, match=r"`bin_s` \(=0\) must be > 0"):
+        centroid_features(c, w, rois, bin_s=0)
 
 
 @pytest.fixture(scope="module")
@@ -100,7 +110,15 @@ def test_centroids_command_writes_eq19_filled_and_labelled(sparse_file, tmp_path
             xy = data[:, :2 * n].reshape(-1, n, 2)
             np.testing.assert_allclose(xy[flags], c_ref[flags], rtol=1e-6)
             np.testing.assert_array_equal(xy[~flags], np.broadcast_to(centre, xy.shape)[~flags])
-            assert np.all(data[:, 3 * n:][~flags] == 0) and np.all(data[:, 3 * n:][flags] >= 1)
+            counts = data[:, 3 * n:4 * n]
+            assert np.all(counts[~flags] == 0) and np.all(counts[flags] >= 1)
+            # eq. 20: velocity of the measured centroids in px/s; during the slip the strips
+            # move up (-y) at the trial's speed through the optics
+            v = data[:, 4 * n:].reshape(-1, n, 2)
+            both = flags[1:] & flags[:-1]
+            np.testing.assert_allclose(v[1:][both], (np.diff(xy, axis=0) / 0.02)[both],
+                                       rtol=1e-4, atol=0.05)
+            assert np.all(v[1:][~both] == 0)
             action = g["sample_labels/action"]
             assert action.attrs["classes"].tolist() == list(ACTIONS)
             ann = src[f"trials/{trial}/annotations"]
@@ -139,16 +157,19 @@ def test_centroids_command_errors(sparse_file, tmp_path):
 
 
 def test_spatial_lstm_trains_on_synth_and_evaluates_on_a_scene(tmp_path):
-    """The chain of configs/train_lstm_spatial.yaml, one epoch on a handful of trials: the
-    synth and the scene streams have the same channels and the pipeline reads them."""
+    """The chain of configs/train_lstm_spatial.yaml, shortened (60 synth trials, 6 epochs):
+    the synth and the scene streams have the same channels, a model trained only on the
+    synth centroids classifies the scene's actions from its centroids, and the centroid
+    file holds the same recordings as the scene file (so `tactile compare` puts the spatial
+    run beside the temporal ones)."""
     rois = REPO / "configs" / "rois_marker_scene.yaml"
     synth = tmp_path / "synth.h5"
-    r = runner.invoke(app, ["synth", "--n", "8", "--seed", "1", "--centroids", str(rois),
+    r = runner.invoke(app, ["synth", "--n", "60", "--seed", "1", "--centroids", str(rois),
                             "--out", str(synth)])
     assert r.exit_code == 0, r.output
     scene = tmp_path / "scene"
     r = runner.invoke(app, ["simulate", "marker-events", "--out", str(scene), "--seed", "2",
-                            "--groups", "1", "--levels", "1-2"])
+                            "--groups", "1", "--levels", "1-3"])
     assert r.exit_code == 0, r.output
     ingested = tmp_path / "scene.h5"
     r = runner.invoke(app, ["ingest", *sorted(str(p) for p in scene.glob("*.npy")),
@@ -160,15 +181,21 @@ def test_spatial_lstm_trains_on_synth_and_evaluates_on_a_scene(tmp_path):
     r = runner.invoke(app, ["centroids", str(ingested), "--rois", str(scene / "scene.json"),
                             "--out", str(stream)])
     assert r.exit_code == 0, r.output
+    assert recording_hashes(stream, sha256_of(stream)) == [sha256_of(ingested)]
     run_dir = tmp_path / "run"
     r = runner.invoke(app, ["train", str(REPO / "configs" / "train_lstm_spatial.yaml"),
-                            "--data", str(synth), "--out", str(run_dir), "--epochs", "1",
+                            "--data", str(synth), "--out", str(run_dir), "--epochs", "6",
                             "--no-progress"])
     assert r.exit_code == 0, r.output
     r = runner.invoke(app, ["evaluate", str(run_dir), "--data", str(stream), "--no-latency",
                             "--json"])
     assert r.exit_code == 0, r.output
     metrics = json.loads(r.output[r.output.index("{"):])
-    assert metrics["n_trials"] == 2 and 0.0 <= metrics["accuracy"] <= 1.0
+    assert metrics["n_trials"] == 3
+    # the full recipe (500 synth trials, 40 epochs) scores 99.3-99.5 % on a 48-trial scene
+    # (benchmarks/RESULTS.md); this short one must still classify the scene
+    assert metrics["accuracy"] >= 0.95, metrics["accuracy"]
+    assert metrics["data"][0]["recordings_sha256"] == [sha256_of(ingested)]
     norm = json.loads((run_dir / "normalisation.json").read_text())
-    assert norm["channels"][:2] == ["strip1_x", "strip1_y"] and len(norm["channels"]) == 12
+    assert norm["channels"][:2] == ["strip1_x", "strip1_y"] and len(norm["channels"]) == 20
+    assert norm["channels"][8:10] == ["strip1_vx", "strip1_vy"]

@@ -178,12 +178,18 @@ def test_synth_cli_adds_the_stream_and_keeps_the_counts(tmp_path):
         np.testing.assert_array_equal(a[trial]["event_counts"], b[trial]["event_counts"])
         np.testing.assert_array_equal(b[trial]["roi_centroids"], c[trial]["roi_centroids"])
         d = b[trial]["roi_centroids"]
-        assert d.dtype == np.float32 and d.shape[1] == len(names) == 16
+        assert d.dtype == np.float32 and d.shape[1] == len(names) == 24
         assert np.isfinite(d).all()
         flags, counts = d[:, 8:12], d[:, 12:16]
         assert set(np.unique(flags)) <= {0.0, 1.0}
         np.testing.assert_array_equal(flags, (counts > 0).astype(np.float32))
         xy = d[:, :8].reshape(-1, 4, 2)
+        # eq. 20: the velocity channels are the measured centroids' differences per second
+        v = d[:, 16:24].reshape(-1, 4, 2)
+        both = (flags[1:] > 0) & (flags[:-1] > 0)
+        np.testing.assert_allclose(v[1:][both], (np.diff(xy, axis=0) / 0.02)[both],
+                                   rtol=1e-4, atol=1e-2)
+        assert (v[1:][~both] == 0).all() and (v[0] == 0).all()
         np.testing.assert_allclose(xy[flags == 0], np.broadcast_to(centre, xy.shape)[flags == 0])
         np.testing.assert_array_equal(b[trial]["action"]["roi_centroids"],
                                       b[trial]["action"]["event_counts"])
