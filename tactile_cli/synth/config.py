@@ -70,13 +70,13 @@ class TimingConfig(_Model):
     """Region durations in s, drawn per trial (action times are continuous, so the 20 ms
     bin grid has a random phase against them)."""
 
-    approach_s: Range = (0.3, 0.6)
+    approach_s: Range = (0.2, 0.8)
     """Trial start -> press start: no contact, background only."""
-    press_after_s: Range = (0.6, 0.9)
+    press_after_s: Range = (0.3, 1.3)
     """End of the press input (T) -> slip start; the press region lasts T + this."""
-    slip_s: Range = (0.8, 2.5)
+    slip_s: Range = (0.6, 2.5)
     """Slip start -> release start."""
-    release_s: Range = (0.6, 1.0)
+    release_s: Range = (0.5, 1.2)
     """Release start -> trial end."""
     release_duration_s: Range = (0.15, 0.25)
     """Length of the release pulse (at most release_s low)."""
