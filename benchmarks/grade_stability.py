@@ -10,10 +10,12 @@ varied at a time:
 - noise: additive Gaussian noise per 20 ms bin, sd in events/bin (the press region has 60
   bins, so the area's sd grows by sqrt(60));
 - saturation: the biggest level flattened by ``limit tanh(net / limit)``, ``limit =
-  alpha / r`` (the scene's default is r = 1.0);
-- alpha_jitter: relative per-trial sd of alpha_1 around its level (scene default 2 %);
+  alpha / r`` (the scene's default is r = 0.6; it was 1.0 before the grading issue);
+- alpha_jitter: relative per-trial sd of alpha_1 around its level (scene default 1 %; it
+  was 2 %);
 - duration_spread: T drawn uniformly from 0.4 s x (1 +- spread) (the scene's default
-  [0.3, 0.5] s is a spread of 0.25): the area is proportional to alpha_1 T.
+  [0.395, 0.405] s is a spread of 0.0125; its first default, [0.3, 0.5] s, was 0.25): the
+  area is proportional to alpha_1 T.
 
 Each setting is graded twice: with the baseline calibration ("fixed") and after
 recalibrating on a training set with the same perturbation ("recalibrated"; None when the
@@ -57,7 +59,7 @@ AXES = {
     "noise": [0, 25, 50, 100, 200, 400, 800, 1600],
     "saturation": [0, 0.25, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.5, 2.0],
     "alpha_jitter": [0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03],
-    "duration_spread": [0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25],
+    "duration_spread": [0, 0.005, 0.01, 0.0125, 0.02, 0.05, 0.1, 0.25],
 }
 LABELS = {"noise": "additive noise sd per bin (events/bin)",
           "saturation": "saturation r = alpha / limit of level 12",
@@ -65,7 +67,7 @@ LABELS = {"noise": "additive noise sd per bin (events/bin)",
           "duration_spread": "press duration spread (T = 0.4 s x (1 +- s))"}
 KWARG = {"noise": "noise_std", "saturation": "top_r", "alpha_jitter": "alpha_jitter",
          "duration_spread": "duration_spread"}
-SCENE_DEFAULT = {"saturation": 1.0, "alpha_jitter": 0.02, "duration_spread": 0.25}
+SCENE_DEFAULT = {"saturation": 0.6, "alpha_jitter": 0.01, "duration_spread": 0.0125}
 
 
 def _score(grades: np.ndarray, truth: np.ndarray) -> dict:
