@@ -20,8 +20,7 @@ complete, NaN-free feature:
   difference of consecutive measured centroids over one bin; 0 in the first bin and where
   either bin has no centroid (no motion is measured there). The same velocity that
   ``tactile slip-rate`` integrates (eq. 21); it gives a model the rate of change directly
-  instead of a small drift of the standardised position (the spatial LSTM scores 99.55 %
-  with it and 99.33 % without on the same scene, benchmarks/RESULTS.md).
+  instead of a small drift of a standardised position.
 
 Channel order: all ROIs' ``_x``/``_y`` pairs first (``strip1_x, strip1_y, ..., stripN_y``),
 then the ``_has_events`` flags, the ``_events`` counts and the ``_vx``/``_vy`` pairs.
@@ -64,6 +63,8 @@ SENSOR = "roi_centroids"
 FLAG_SUFFIX = "_has_events"
 COUNT_SUFFIX = "_events"
 VELOCITY_AXES = ("vx", "vy")
+#: Channels per ROI: x, y, has_events, events, vx, vy.
+CHANNELS_PER_ROI = 6
 
 
 def channel_names(rois: Sequence[Roi]) -> list[str]:
@@ -144,7 +145,7 @@ def add_centroid_sensor(
 # -- recordings -> stream ---------------------------------------------------------------------
 @dataclass(frozen=True)
 class CentroidTrialStream:
-    """One trial's stream: t_s (n_bins,) bin centres, s; data (n_bins, 4 n_rois) float32 in
+    """One trial's stream: t_s (n_bins,) bin centres, s; data (n_bins, 6 n_rois) float32 in
     :func:`channel_names` order; action (n_bins,) int8 class index from the annotations
     (-1 outside every action region) or None without annotations; annotations: the
     trial's ``(start_s, end_s, label)``."""
@@ -158,7 +159,7 @@ class CentroidTrialStream:
     @property
     def measured_fraction(self) -> float:
         """Share of (bin, ROI) cells with a measured (not filled) centroid."""
-        n = (self.data.shape[1]) // 4
+        n = self.data.shape[1] // CHANNELS_PER_ROI
         flags = self.data[:, 2 * n:3 * n]
         return float(flags.mean()) if flags.size else 0.0
 
@@ -288,6 +289,6 @@ def _attr(value: Any) -> Any:
     return value
 
 
-__all__ = ["COUNT_SUFFIX", "FLAG_SUFFIX", "SENSOR", "STREAM", "VELOCITY_AXES", "CentroidFileResult",
+__all__ = ["CHANNELS_PER_ROI", "COUNT_SUFFIX", "FLAG_SUFFIX", "SENSOR", "STREAM", "VELOCITY_AXES", "CentroidFileResult",
            "CentroidTrialStream", "add_centroid_sensor", "centroid_features", "channel_names",
            "channel_units", "roi_centres", "trial_centroid_stream", "write_centroid_file"]

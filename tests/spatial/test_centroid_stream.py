@@ -106,6 +106,8 @@ def test_centroids_command_writes_eq19_filled_and_labelled(sparse_file, tmp_path
             np.testing.assert_array_equal(t_s, t_ref)
             flags = data[:, 2 * n:3 * n].astype(bool)
             np.testing.assert_array_equal(flags, np.isfinite(c_ref[..., 0]))
+            reported = next(r for r in report["trials"] if r["trial"] == trial)
+            assert reported["measured_fraction"] == pytest.approx(flags.mean(), abs=1e-6)
             assert 0 < flags.mean() < 1  # the sparse approach leaves bins empty
             xy = data[:, :2 * n].reshape(-1, n, 2)
             np.testing.assert_allclose(xy[flags], c_ref[flags], rtol=1e-6)
