@@ -13,7 +13,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: demo demo-events demo-learn test ingest bench lint clean
+.PHONY: bench-long demo demo-events demo-learn test ingest bench lint clean
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -56,21 +56,27 @@ demo: $(STAMP)
 	$(MAKE) --no-print-directory demo-events DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-learn DEMO=$(DEMO)
 	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
-	$(TACTILE) report $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --data $(DEMO)/h5/scene.h5 --figures $(DEMO)/events --figures $(DEMO)/quicklook --out $(DEMO)/report
+	$(TACTILE) report $(DEMO_RUNS) --data $(DEMO)/h5/scene.h5 --figures $(DEMO)/events --figures $(DEMO)/quicklook --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 # Four model families trained only on model-based trajectories (tactile synth) and evaluated
-# on the scene recordings they never saw (paper 000, Table I), compared by accuracy and cost.
+# on the scene recordings they never saw (paper 000, Table I), and the spatial-temporal LSTM
+# (sec. 5.2, Table II) trained on the same synth trials' ROI centroid trajectories and
+# evaluated on the scene's centroids (tactile centroids), all compared by accuracy and cost.
 DEMO_FAMILIES := lstm cnn1d fnn mlp
+DEMO_RUNS := $(foreach m,$(DEMO_FAMILIES),$(DEMO)/runs/$(m)) $(DEMO)/runs/lstm_spatial
 demo-learn: $(STAMP)
 	rm -rf $(DEMO)/runs
-	$(TACTILE) synth --n 240 --seed 1 --out $(DEMO)/h5/synth_train.h5 --overwrite
+	$(TACTILE) synth --n 240 --seed 1 --centroids $(DEMO)/scene/scene.json --out $(DEMO)/h5/synth_train.h5 --overwrite
 	for m in $(DEMO_FAMILIES); do \
 	  $(TACTILE) train configs/train_$${m}_actions.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/$$m --no-progress || exit 1; \
 	  $(TACTILE) evaluate $(DEMO)/runs/$$m --data $(DEMO)/h5/scene.h5 || exit 1; \
 	done
-	$(TACTILE) compare $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --out $(DEMO)/compare
-	$(TACTILE) perturb $(DEMO)/runs/lstm $(DEMO)/runs/cnn1d $(DEMO)/runs/fnn $(DEMO)/runs/mlp --data $(DEMO)/h5/scene.h5 --out $(DEMO)/perturb
+	$(TACTILE) centroids $(DEMO)/h5/scene.h5 --rois $(DEMO)/scene/scene.json --out $(DEMO)/h5/scene_centroids.h5 --overwrite --no-progress
+	$(TACTILE) train configs/train_lstm_spatial.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/lstm_spatial --no-progress
+	$(TACTILE) evaluate $(DEMO)/runs/lstm_spatial --data $(DEMO)/h5/scene_centroids.h5 --name scene
+	$(TACTILE) compare $(DEMO_RUNS) --out $(DEMO)/compare
+	$(TACTILE) perturb $(foreach m,$(DEMO_FAMILIES),$(DEMO)/runs/$(m)) --data $(DEMO)/h5/scene.h5 --out $(DEMO)/perturb
 
 # The event-sensor chain of paper 000 on a simulated marker-event scene with known ground
 # truth: simulate -> ingest (with the truth as annotations and labels) -> accumulate and
@@ -93,6 +99,14 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py
 	$(BIN)/python benchmarks/fit_fos.py
 	$(BIN)/python benchmarks/fuzzy.py
+
+# Stability sweeps and accuracy studies: minutes each (about 35 in all on 2 cores); they
+# rewrite benchmarks/figures/. xela_loto needs the real recordings in ../shared/data.
+bench-long: $(STAMP)
+	$(BIN)/python benchmarks/fos_stability.py
+	$(BIN)/python benchmarks/grade_stability.py
+	$(BIN)/python benchmarks/xela_loto.py
+	$(BIN)/python benchmarks/spatial_classifier.py
 
 # ---- batch ingest: one output per input, atomic writes, up-to-date outputs skipped ----
 RAW ?= raw
