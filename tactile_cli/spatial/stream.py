@@ -289,6 +289,7 @@ def _attr(value: Any) -> Any:
     return value
 
 
-__all__ = ["CHANNELS_PER_ROI", "COUNT_SUFFIX", "FLAG_SUFFIX", "SENSOR", "STREAM", "VELOCITY_AXES", "CentroidFileResult",
-           "CentroidTrialStream", "add_centroid_sensor", "centroid_features", "channel_names",
-           "channel_units", "roi_centres", "trial_centroid_stream", "write_centroid_file"]
+__all__ = ["CHANNELS_PER_ROI", "COUNT_SUFFIX", "FLAG_SUFFIX", "SENSOR", "STREAM",
+           "VELOCITY_AXES", "CentroidFileResult", "CentroidTrialStream", "add_centroid_sensor",
+           "centroid_features", "channel_names", "channel_units", "roi_centres",
+           "trial_centroid_stream", "write_centroid_file"]
