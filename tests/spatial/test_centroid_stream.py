@@ -194,7 +194,7 @@ def test_spatial_lstm_trains_on_synth_and_evaluates_on_a_scene(tmp_path):
     assert r.exit_code == 0, r.output
     metrics = json.loads(r.output[r.output.index("{"):])
     assert metrics["n_trials"] == 3
-    # the full recipe (500 synth trials, 40 epochs) scores 99.3-99.5 % on a 48-trial scene
+    # the full recipe (500 synth trials, 40 epochs) scores 99.27-99.36 % on 48-trial scenes
     # (benchmarks/RESULTS.md); this short one must still classify the scene
     assert metrics["accuracy"] >= 0.95, metrics["accuracy"]
     assert metrics["data"][0]["recordings_sha256"] == [sha256_of(ingested)]
