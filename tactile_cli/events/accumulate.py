@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fos.actions import ACTIONS, BIN_S
-from ..store.validate import check_readable
+from ..store.reader import open_tactile
 
 #: Channel order of :meth:`EventCounts.stack` (and of the ``event_counts`` HDF5 stream).
 CHANNELS: tuple[str, ...] = ("positive", "negative", "net")
@@ -205,12 +205,7 @@ def trial_counts(path: str | Path, trial: str, *, bin_s: float = BIN_S) -> Event
     """
     path = Path(path)
     bin_us = bin_us_of(bin_s)
-    try:
-        check_readable(path)
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    with h5:
+    with open_tactile(path) as h5:
         events = _open_trial_events(h5, path, trial)
         origin_us = trial_origin_us(events)
         index_origin_us = int(events.attrs["ms_index_origin_us"])
@@ -241,11 +236,7 @@ def trial_counts(path: str | Path, trial: str, *, bin_s: float = BIN_S) -> Event
 def read_annotations(path: str | Path, trial: str) -> list[tuple[float, float, str]]:
     """``(start_s, end_s, label)`` of one trial's annotations (empty when it has none)."""
     path = Path(path)
-    try:
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    with h5:
+    with open_tactile(path) as h5:
         if trial not in h5["trials"]:
             raise unknown_trial(path, trial, list(h5["trials"].keys()))
         group = h5["trials"][trial]

@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import InputError
 from ..fos.actions import ACTIONS, BIN_S
 from ..progress import NullProgress, Progress
-from ..store.validate import check_readable
+from ..store.reader import attr_value, open_tactile
 from ..store.writer import StoreWriter
 from .accumulate import (
     CHANNELS,
@@ -146,16 +146,6 @@ def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
-
-
 def _select_trials(h5: h5py.File, path: Path, trials: Sequence[str] | None
                    ) -> tuple[list[str], list[str]]:
     """(trials to accumulate, trials skipped for having no events)."""
@@ -201,23 +191,18 @@ def accumulate_file(
                          "centred moving average); pass e.g. --smooth 5")
     if not path.is_file():
         raise InputError("file not found", path=path)
-    try:
-        check_readable(path)
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    with h5:
+    with open_tactile(path) as h5:
         names, skipped = _select_trials(h5, path, trials)
         meta = {}
         for name in names:
             group = h5["trials"][name]
             sensor = ""
             if "events" in group:
-                sensor = _plain(group["events"].attrs["sensor"])
+                sensor = attr_value(group["events"].attrs["sensor"])
             meta[name] = (
                 sensor,
-                {k: _plain(v) for k, v in group["labels"].attrs.items()},
-                _plain(group.attrs.get("split", "")),
+                {k: attr_value(v) for k, v in group["labels"].attrs.items()},
+                attr_value(group.attrs.get("split", "")),
             )
         sensors = {}
         for sensor, _, _ in meta.values():

@@ -30,7 +30,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..store.validate import check_readable
+from ..store.reader import attr_value, open_tactile
 from .actions import BIN_S
 
 RegionsMode = Literal["annotations", "detect", "auto"]
@@ -102,22 +102,12 @@ def label_int(value: Any) -> int | None:
     return int(number) if np.isfinite(number) and number == int(number) else None
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
-
-
 def _stream_counts(h5: h5py.File, path: Path, trial: str, bin_s: float | None
                    ) -> tuple[np.ndarray, np.ndarray, float]:
     """Bin centres, net counts and bin width of a trial's ``signals/event_counts``."""
     where = f"/trials/{trial}/signals/{COUNTS_STREAM}"
     stream = h5[where]
-    sensor = _plain(stream.attrs.get("sensor", ""))
+    sensor = attr_value(stream.attrs.get("sensor", ""))
     sensor_group = h5["sensors"].get(sensor) if sensor else None
     if sensor_group is None or "channel_names" not in sensor_group:
         raise InputError(f"the stream's sensor {sensor!r} has no channel_names; cannot find "
@@ -213,12 +203,7 @@ def read_trial_regions(
         raise ValueError(f"`regions` (={regions!r}) must be one of {REGION_MODES}.")
     if bin_s is not None and not (np.isfinite(bin_s) and bin_s > 0):
         raise ValueError(f"`bin_s` (={bin_s}) must be a positive number of seconds.")
-    try:
-        check_readable(path)
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    with h5:
+    with open_tactile(path) as h5:
         names = list(h5["trials"].keys())
         if trials is not None:
             missing = [t for t in trials if t not in h5["trials"]]
@@ -230,7 +215,7 @@ def read_trial_regions(
         plan = []
         for name in names:
             group = h5["trials"][name]
-            labels = {k: _plain(v) for k, v in group["labels"].attrs.items()}
+            labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()}
             ann = _annotated_regions(h5, path, name) if regions != "detect" else None
             if regions == "annotations" and ann is None:
                 raise InputError("no 'press' and 'slip' annotations; add them at ingest "

@@ -25,6 +25,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from ..store.reader import open_tactile
 
 if TYPE_CHECKING:  # the fitting code (and jax) is not needed to read a fits group
     from .protocol import RegionFits
@@ -134,11 +135,7 @@ def read_fit_group(path: str | Path, name: str) -> dict[str, np.ndarray]:
     """
     path = Path(path)
     where = f"/derived/fits/{name}"
-    try:
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    with h5:
+    with open_tactile(path) as h5:
         if where not in h5:
             raise InputError(f"no {where}; write it with `tactile fit-fos {path}`", path=path)
         group = h5[where]

@@ -35,19 +35,11 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from ..store.reader import attr_value, open_tactile
 from ..store.validate import check_readable
 
 #: Trial labels the grader reads as the truth.
 LABEL_KEYS = ("force_grade", "force_level")
-
-
-def _plain(value: Any) -> Any:
-    """An HDF5 attribute as a plain Python value."""
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 @dataclass(frozen=True)
@@ -164,17 +156,13 @@ def hdf5_areas(path: str | Path, *, bin_s: float = 0.02, region: str = "press") 
         -> list[TrialArea]:
     """Areas of every trial of one tactile HDF5 file (see the module docstring)."""
     path = Path(path)
-    try:
-        check_readable(path)
-        h5 = h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
+    h5 = open_tactile(path)
     plan = []
     with h5:
         if "trials" not in h5:
             raise InputError("no /trials group; not a tactile file", path=path)
         for name, group in h5["trials"].items():
-            labels = {k: _plain(v) for k, v in group["labels"].attrs.items()
+            labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()
                       if k in LABEL_KEYS} if "labels" in group else {}
             annotations = _annotations(group, region)
             stream = None if "events" in group else _net_stream(h5, group)
@@ -188,7 +176,7 @@ def hdf5_areas(path: str | Path, *, bin_s: float = 0.02, region: str = "press") 
 
 def _trial_labels(path: Path) -> dict[str, dict[str, Any]]:
     with h5py.File(path, "r") as h5:
-        return {name: {k: _plain(v) for k, v in g["labels"].attrs.items() if k in LABEL_KEYS}
+        return {name: {k: attr_value(v) for k, v in g["labels"].attrs.items() if k in LABEL_KEYS}
                 if "labels" in g else {} for name, g in h5["trials"].items()}
 
 
@@ -233,7 +221,7 @@ def _net_stream(h5: h5py.File, group: h5py.Group) -> dict[str, Any] | None:
     names = sorted(group["signals"], key=lambda s: s != "event_counts")
     for stream_name in names:
         s = group["signals"][stream_name]
-        sensor = h5["sensors"].get(_plain(s.attrs.get("sensor", "")))
+        sensor = h5["sensors"].get(attr_value(s.attrs.get("sensor", "")))
         if sensor is None or "channel_names" not in sensor:
             continue
         channels = [str(c) for c in sensor["channel_names"].asstr()[()]]
@@ -247,7 +235,7 @@ def _net_stream(h5: h5py.File, group: h5py.Group) -> dict[str, Any] | None:
         }
         if "sample_labels" in s and "action" in s["sample_labels"]:
             ds = s["sample_labels"]["action"]
-            classes = [str(_plain(c)) for c in ds.attrs.get("classes", [])]
+            classes = [str(attr_value(c)) for c in ds.attrs.get("classes", [])]
             out["action"] = (ds[()], classes)
         return out
     return None

@@ -42,18 +42,11 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from ..store.reader import attr_value, open_tactile
 from .config import SUMMARY_FEATURES, DataConfig, SplitConfig, TargetConfig
 from .heads import HeadSpec
 
 SPLITS: tuple[str, ...] = ("train", "val", "test")
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 @dataclass
@@ -92,20 +85,13 @@ def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeri
     Raises :class:`InputError` naming the file and HDF5 path when a trial lacks the
     stream, a channel or a label (it lists what is there).
     """
-    from ..store.validate import check_readable
-
     sample_targets = [t.name for t in data.targets if t.source == "sample"]
     trials: list[TrialSeries] = []
     for path in paths:
         path = Path(path)
         if not path.exists():
             raise InputError("data file not found", path=path)
-        try:
-            check_readable(path)
-            h5 = h5py.File(path, "r")
-        except OSError as exc:
-            raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-        with h5:
+        with open_tactile(path) as h5:
             if "trials" not in h5 or len(h5["trials"]) == 0:
                 raise InputError("the file has no trials", path=path)
             for name, group in h5["trials"].items():
@@ -115,14 +101,14 @@ def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeri
 
 def _read_trial(path: Path, h5: h5py.File, name: str, group: h5py.Group, data: DataConfig,
                 sample_targets: list[str]) -> TrialSeries:
-    split_attr = str(_plain(group.attrs.get("split", "")))
-    trial_labels = {k: _plain(v) for k, v in group["labels"].attrs.items()} \
+    split_attr = str(attr_value(group.attrs.get("split", "")))
+    trial_labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()} \
         if "labels" in group else {}
     signals = group.get("signals")
     where = f"/trials/{name}"
     if signals is not None and data.stream in signals:
         stream = signals[data.stream]
-        sensor = str(_plain(stream.attrs["sensor"]))
+        sensor = str(attr_value(stream.attrs["sensor"]))
         sensor_group = h5["sensors"].get(sensor)
         if sensor_group is None or "channel_names" not in sensor_group:
             raise InputError(f"sensor {sensor!r} has no channel_names; channels cannot be "
@@ -150,7 +136,7 @@ def _read_trial(path: Path, h5: h5py.File, name: str, group: h5py.Group, data: D
             ds = stream["sample_labels"][label]
             values = ds[()]
             if "classes" in ds.attrs:
-                classes[label] = tuple(str(_plain(c)) for c in ds.attrs["classes"])
+                classes[label] = tuple(str(attr_value(c)) for c in ds.attrs["classes"])
                 labels[label] = values.astype(np.int64)
             else:
                 classes[label] = None

@@ -51,6 +51,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
+from ..store.reader import attr_value
 from ..store.writer import StoreWriter
 from .config import SpatialConfig
 from .roi import Roi, trial_roi_centroids
@@ -265,9 +266,9 @@ def write_centroid_file(
             for name in names:
                 stream = trial_centroid_stream(path, name, config)
                 g = src["trials"][name]
-                labels = {k: _attr(v) for k, v in g["labels"].attrs.items()} \
+                labels = {k: attr_value(v) for k, v in g["labels"].attrs.items()} \
                     if "labels" in g else {}
-                tw = w.trial(name, labels=labels, split=str(_attr(g.attrs.get("split", ""))),
+                tw = w.trial(name, labels=labels, split=str(attr_value(g.attrs.get("split", ""))),
                              sources=[source], annotations=stream.annotations,
                              duration_s=float(g.attrs.get("duration_s", 0.0)))
                 sample_labels = {} if stream.action is None else {
@@ -279,14 +280,6 @@ def write_centroid_file(
         progress.finish()
         written = w.commit()
     return CentroidFileResult(written, tuple(done), tuple(config.rois), config.centroid.bin_s)
-
-
-def _attr(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 __all__ = ["CHANNELS_PER_ROI", "COUNT_SUFFIX", "FLAG_SUFFIX", "SENSOR", "STREAM",

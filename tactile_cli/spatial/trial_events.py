@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import h5py
 import numpy as np
 
 from ..errors import InputError
+from ..store.reader import attr_value, open_tactile
 from ..store.validate import check_readable
 
 
@@ -49,14 +49,6 @@ class EventWindow:
         return int(self.t_us.shape[0])
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 class TrialEvents:
     """One trial's events, opened for windowed reads; use as a context manager.
 
@@ -69,11 +61,7 @@ class TrialEvents:
         self.trial = trial
         if not self.path.exists():
             raise InputError("file not found", path=self.path)
-        try:
-            check_readable(self.path)
-            self._h5 = h5py.File(self.path, "r")
-        except OSError as exc:
-            raise InputError(f"not a readable HDF5 file ({exc})", path=self.path) from None
+        self._h5 = open_tactile(self.path)
         try:
             self._open()
         except BaseException:
@@ -97,7 +85,7 @@ class TrialEvents:
         if self.n_events == 0:
             raise InputError("trial has no events", path=self.path,
                              where=f"/trials/{self.trial}/events")
-        sensor_name = _plain(self._events.attrs["sensor"])
+        sensor_name = attr_value(self._events.attrs["sensor"])
         s = self._h5["sensors"][sensor_name].attrs
         optics = {k: float(s[k]) for k in ("pixel_pitch_m", "focal_length_m", "strip_distance_m")
                   if k in s}
@@ -112,7 +100,7 @@ class TrialEvents:
         duration_s = float(group.attrs.get("duration_s", 0.0))
         #: trial end in trial seconds: the recorded duration, or the last event if later
         self.end_s = max(duration_s, (self.t_last_us + 1 - self.origin_us) * 1e-6)
-        self.labels = {k: _plain(v) for k, v in group["labels"].attrs.items()} \
+        self.labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()} \
             if "labels" in group else {}
 
     def __enter__(self) -> TrialEvents:

@@ -10,17 +10,31 @@ from typing import Any
 import h5py
 import numpy as np
 
+from ..errors import InputError
 from .validate import check_readable
 
 
-def _plain(value: Any) -> Any:
+def attr_value(value: Any) -> Any:
+    """An HDF5 attribute (or string dataset element) as a plain Python value: bytes
+    decoded as UTF-8, numpy scalars as Python scalars, arrays as lists of such values."""
     if isinstance(value, bytes):
         return value.decode("utf-8", "replace")
     if isinstance(value, np.ndarray):
-        return [_plain(v) for v in value.tolist()]
+        return [attr_value(v) for v in value.tolist()]
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def open_tactile(path: str | Path) -> h5py.File:
+    """Open a tactile HDF5 file for reading after the schema version gate
+    (:func:`~tactile_cli.store.validate.check_readable`); a file HDF5 cannot open is one
+    :class:`InputError` line naming it. Use as a context manager."""
+    try:
+        check_readable(path)
+        return h5py.File(path, "r")
+    except OSError as exc:
+        raise InputError(f"not a readable HDF5 file ({exc})", path=Path(path)) from None
 
 
 @dataclass
@@ -84,9 +98,9 @@ def summarize(path: str | Path) -> FileSummary:
         summary = FileSummary(
             file=str(path),
             schema_version=version,
-            tool_version=_plain(a.get("tool_version", "")),
-            created_utc=_plain(a.get("created_utc", "")),
-            command=_plain(a.get("command", "")),
+            tool_version=attr_value(a.get("tool_version", "")),
+            created_utc=attr_value(a.get("created_utc", "")),
+            command=attr_value(a.get("command", "")),
             n_sources=int(h5["provenance/sources/path"].shape[0])
             if "provenance/sources/path" in h5
             else 0,
@@ -102,7 +116,7 @@ def summarize(path: str | Path) -> FileSummary:
             summary.sensors.append(
                 SensorInfo(
                     name,
-                    _plain(g.attrs["kind"]),
+                    attr_value(g.attrs["kind"]),
                     float(g.attrs["sample_rate_hz"]),
                     n_ch,
                     geometry,
@@ -118,8 +132,8 @@ def summarize(path: str | Path) -> FileSummary:
                 TrialInfo(
                     name=name,
                     duration_s=float(g.attrs.get("duration_s", 0.0)),
-                    split=_plain(g.attrs.get("split", "")),
-                    labels={k: _plain(v) for k, v in g["labels"].attrs.items()},
+                    split=attr_value(g.attrs.get("split", "")),
+                    labels={k: attr_value(v) for k, v in g["labels"].attrs.items()},
                     n_events=int(g["events/t"].shape[0]) if "events" in g else 0,
                     streams=streams,
                     n_frames=int(g["frames/images"].shape[0]) if "frames" in g else 0,
@@ -168,7 +182,7 @@ def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
         return {
             "data": g["data"][()],
             "t_s": g["t_s"][()],
-            "sensor": _plain(g.attrs["sensor"]),
+            "sensor": attr_value(g.attrs["sensor"]),
             "sample_labels": labels,
         }
 
@@ -190,8 +204,8 @@ def recording_hashes(path: str | Path, own_sha256: str) -> list[str]:
     with h5py.File(path, "r") as h5:
         if "provenance/sources/path" not in h5:
             return [own_sha256]
-        paths = [_plain(p) for p in h5["provenance/sources/path"][()]]
-        shas = [_plain(s) for s in h5["provenance/sources/sha256"][()]]
+        paths = [attr_value(p) for p in h5["provenance/sources/path"][()]]
+        shas = [attr_value(s) for s in h5["provenance/sources/sha256"][()]]
     derived = sorted({s for p, s in zip(paths, shas, strict=True)
                       if str(p).lower().endswith(TACTILE_SUFFIXES)})
     return derived or [own_sha256]
