@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from ..config_file import read_yaml
 from ..errors import InputError
 from .fuzzy import MF_KINDS, MamdaniSystem, MembershipFunction
 
@@ -206,20 +207,7 @@ def load_config(path: str | Path) -> GraderConfig:
     """Read and validate a grader config; any problem is one :class:`InputError` line
     naming the key and its line."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("config file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the config ({exc.__class__.__name__}: {exc})",
-                         path=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = None if mark is None else f"line {mark.line + 1}"
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise InputError(f"not valid YAML ({problem})", path=path, where=where) from None
+    text, raw = read_yaml(path)
     if not isinstance(raw, dict):
         raise InputError("a grader config is a YAML mapping with keys input, output, rules; "
                          "see configs/grade_marker.yaml", path=path)

@@ -41,6 +41,7 @@ from typing import Any, Literal, get_origin
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from ..config_file import read_yaml
 from ..errors import InputError
 from ..store.spec import load_spec
 
@@ -384,24 +385,7 @@ def render(template: str, fields: dict[str, str]) -> str:
 def load_mapping(path: str | Path) -> CsvMapping:
     """Read and validate a mapping file; any problem is one :class:`InputError` line."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("mapping file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the mapping file ({exc.__class__.__name__}: {exc})",
-                         path=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = None if mark is None else f"line {mark.line + 1}, column {mark.column + 1}"
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        context, start = getattr(exc, "context", None), getattr(exc, "context_mark", None)
-        if context and start is not None and mark is not None and start.line != mark.line:
-            problem += f", {context} that starts at line {start.line + 1}"
-        raise InputError(f"not valid YAML ({problem}); check the indentation and quoting there",
-                         path=path, where=where) from None
+    text, raw = read_yaml(path, "mapping file")
     if not isinstance(raw, dict):
         raise InputError("a mapping file is a YAML mapping with keys trials, streams (and "
                          "optionally version, csv, files); see configs/mapping_example.yaml",

@@ -39,6 +39,7 @@ from pydantic import (
     model_validator,
 )
 
+from ..config_file import read_yaml
 from ..errors import InputError
 
 #: Summary features of the MLP family, in the order they are computed (per channel).
@@ -278,20 +279,7 @@ def load_config(path: str | Path) -> TrainConfig:
     """Read and validate a training config; any problem is one :class:`InputError` line
     naming the file, the line and the key."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("config file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the config ({exc.__class__.__name__}: {exc})",
-                         path=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = None if mark is None else f"line {mark.line + 1}, column {mark.column + 1}"
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise InputError(f"not valid YAML ({problem})", path=path, where=where) from None
+    text, raw = read_yaml(path)
     return parse_config(raw, path=path, text=text)
 
 

@@ -25,6 +25,7 @@ from pydantic import (
     model_validator,
 )
 
+from ..config_file import read_yaml
 from ..errors import InputError
 
 
@@ -323,20 +324,7 @@ def load_scene_config(path: str | Path) -> SceneConfig:
     """Read and validate a scene config file; any problem is one :class:`InputError` line
     naming the file, the line and the key."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("config file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the config file ({exc.__class__.__name__}: {exc})",
-                         path=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = None if mark is None else f"line {mark.line + 1}"
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise InputError(f"not valid YAML ({problem})", path=path, where=where) from None
+    text, raw = read_yaml(path)
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):

@@ -28,8 +28,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from ..config_file import parse_yaml, read_config_text
 from ..errors import InputError
 from .frames import _check_median
 from .optics import StripOptics
@@ -254,7 +253,7 @@ def load_config(path: str | Path) -> SpatialConfig:
     path = Path(path)
     if not path.is_file():
         raise InputError("config file not found", path=path)
-    text = path.read_text(encoding="utf-8")
+    text = read_config_text(path)
     if path.suffix.lower() == ".json":
         try:
             raw = json.loads(text)
@@ -266,11 +265,4 @@ def load_config(path: str | Path) -> SpatialConfig:
         if raw.get("format") == SCENE_FORMAT:
             raw = scene_mapping(raw, path)
         return config_from_mapping(raw, path=path)
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = "" if mark is None else f" at line {mark.line + 1}"
-        raise InputError(f"not valid YAML{where}; check the indentation and quoting",
-                         path=path) from None
-    return config_from_mapping(raw, path=path)
+    return config_from_mapping(parse_yaml(text, path), path=path)

@@ -16,6 +16,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from ..config_file import read_yaml
 from ..errors import InputError
 
 Range = tuple[float, float]
@@ -245,20 +246,7 @@ def load_synth_config(path: str | Path | None) -> SynthConfig:
     if path is None:
         return SynthConfig()
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError("config file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the config file ({exc.__class__.__name__})",
-                         path=path) from None
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise InputError(f"not valid YAML ({problem})", path=path,
-                         where=None if mark is None else f"line {mark.line + 1}") from None
+    text, raw = read_yaml(path)
     if raw is None:
         raw = {}
     if not isinstance(raw, dict):

@@ -147,14 +147,16 @@ def test_repo_config_loads():
      "`centroid.background: approach` needs `centroid.median: 1` (the median filter already "
      "removes isolated background events); set `background: none`"),
     ("version: 2\n", "`version` is 2; this tool reads version 1"),
-    ("rois: [\n", "not valid YAML at line 2; check the indentation and quoting"),
+    ("rois: [\n", "not valid YAML (expected the node content, but found '<stream end>'); "
+                  "check the indentation and quoting there"),
 ])
 def test_config_errors_name_the_key(tmp_path, text, message):
     cfg = tmp_path / "c.yaml"
     cfg.write_text(text)
     with pytest.raises(InputError) as err:
         load_config(cfg)
-    assert str(err.value) == f"{cfg}: {message}"
+    where = ", line 2, column 1" if message.startswith("not valid YAML") else ""
+    assert str(err.value) == f"{cfg}{where}: {message}"
 
 
 def test_scene_json_is_read_as_a_config(tmp_path):
