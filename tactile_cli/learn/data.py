@@ -78,6 +78,17 @@ class TrialSeries:
 
 
 # -- reading ---------------------------------------------------------------------------------
+def data_files(data_paths: Sequence[str | Path]) -> list[Path]:
+    """The ``--data`` files as paths; InputError when none is given or one is missing."""
+    paths = [Path(p) for p in data_paths]
+    if not paths:
+        raise InputError("no data files; give --data FILE")
+    for p in paths:
+        if not p.is_file():
+            raise InputError("data file not found", path=p)
+    return paths
+
+
 def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeries]:
     """Every trial of the given files, with the configured stream, channels and the
     sample labels the config's targets need.
@@ -630,7 +641,7 @@ def summary_features(windows: np.ndarray, names: Sequence[str] = SUMMARY_FEATURE
 
 
 __all__ = ["SPLITS", "Normalisation", "SplitAssignment", "TrialSeries",
-           "WindowSet", "assign_splits", "check_heads_match", "class_weights",
+           "WindowSet", "assign_splits", "check_heads_match", "class_weights", "data_files",
            "fit_normalisation", "make_windows", "per_sample_targets", "read_trials",
            "regression_stats", "resolve_heads", "summary_features", "transform_samples",
            "window_ends"]

@@ -36,6 +36,7 @@ from .data import (
     WindowSet,
     assign_splits,
     check_heads_match,
+    data_files,
     make_windows,
     read_trials,
 )
@@ -224,12 +225,7 @@ def evaluate(
     latency measurement.
     """
     run = runs.load_run(run_dir)
-    paths = [Path(p) for p in data_paths]
-    if not paths:
-        raise InputError("no data files; give --data FILE")
-    for p in paths:
-        if not p.is_file():
-            raise InputError("data file not found", path=p)
+    paths = data_files(data_paths)
     if split not in ("all", "test"):
         raise InputError(f"--split must be all or test, got {split!r}")
     cfg = run.config

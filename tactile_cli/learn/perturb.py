@@ -512,17 +512,12 @@ def perturb_evaluate(
     """
     import time
 
-    from .data import assign_splits, check_heads_match, read_trials
+    from .data import assign_splits, check_heads_match, data_files, read_trials
     from .heads import primary_head
 
     t_start = time.perf_counter()
     run_obj = run if isinstance(run, runs.Run) else runs.load_run(run)
-    paths = [Path(p) for p in data_paths]
-    if not paths:
-        raise InputError("no data files; give --data FILE")
-    for p in paths:
-        if not p.is_file():
-            raise InputError("data file not found", path=p)
+    paths = data_files(data_paths)
     if split not in ("all", "test"):
         raise InputError(f"--split must be all or test, got {split!r}")
     if threshold is not None and not 0 <= threshold <= 1:

@@ -39,6 +39,7 @@ from .data import (
     WindowSet,
     assign_splits,
     class_weights,
+    data_files,
     fit_normalisation,
     make_windows,
     read_trials,
@@ -218,12 +219,7 @@ def train(
     out = Path(out)
     if out.exists() and not overwrite:
         raise InputError("output folder exists; pass --overwrite to replace it", path=out)
-    paths = [Path(p) for p in data_paths]
-    if not paths:
-        raise InputError("no data files; give --data FILE")
-    for p in paths:
-        if not p.is_file():
-            raise InputError("data file not found", path=p)
+    paths = data_files(data_paths)
     opt_cfg = config.optim
     threads = opt_cfg.threads
     with deterministic(config.seed, threads):
