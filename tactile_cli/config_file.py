@@ -9,6 +9,7 @@ of the problem and where the enclosing construct starts.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -45,10 +46,45 @@ def parse_yaml(text: str, path: str | Path) -> Any:
                          path=Path(path), where=where) from None
 
 
+def key_line(text: str, keys: Sequence[Any], *, start: int | None = None,
+             skip_missing: bool = False) -> int | None:
+    """1-based line of the YAML node at ``keys`` (mapping keys, list indexes) in ``text``:
+    the key's line for a mapping entry, the item's line for a list entry; for keys that are
+    not all there, the line of the deepest one found (``start`` when none is).
+
+    Keys match by their text, so a pydantic location's ``12`` finds the YAML key ``12``.
+    ``skip_missing``: a key that is not in its mapping is passed over and the next one is
+    looked up in the same mapping (for the tags pydantic inserts into union locations)
+    instead of ending the walk. None when ``text`` is not YAML.
+    """
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return None
+    line = start
+    for part in keys:
+        if isinstance(node, yaml.MappingNode):
+            for key_node, value_node in node.value:
+                if str(getattr(key_node, "value", None)) == str(part):
+                    line, node = key_node.start_mark.line + 1, value_node
+                    break
+            else:
+                if not skip_missing:
+                    return line
+        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
+            if part >= len(node.value):
+                return line
+            node = node.value[part]
+            line = node.start_mark.line + 1
+        elif not skip_missing:
+            return line
+    return line
+
+
 def read_yaml(path: str | Path, what: str = "config file") -> tuple[str, Any]:
     """``(text, parsed)`` of a YAML file (see :func:`read_config_text`, :func:`parse_yaml`)."""
     text = read_config_text(path, what)
     return text, parse_yaml(text, path)
 
 
-__all__ = ["parse_yaml", "read_config_text", "read_yaml"]
+__all__ = ["key_line", "parse_yaml", "read_config_text", "read_yaml"]

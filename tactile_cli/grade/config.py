@@ -23,7 +23,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_file import read_yaml
+from ..config_file import key_line, read_yaml
 from ..errors import InputError
 from .fuzzy import MF_KINDS, MamdaniSystem, MembershipFunction
 
@@ -238,7 +238,7 @@ def config_from_dict(raw: dict[str, Any], *, path: str | Path | None = None,
             message = f"`{key}`: {msg}"
         else:
             message = msg
-        line = _line_of(text, keys) if text and keys else None
+        line = key_line(text, keys, start=1) if text and keys else None
         raise InputError(message, path=path, where=None if line is None else f"line {line}") \
             from None
 
@@ -267,30 +267,6 @@ def _allowed(keys: list[Any], raw: dict[str, Any]) -> list[str]:
     if isinstance(model, type) and issubclass(model, BaseModel):
         return [f.alias or n for n, f in model.model_fields.items()]
     return []
-
-
-def _line_of(text: str, keys: list[Any]) -> int | None:
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None
-    line = None if node is None else node.start_mark.line + 1
-    for part in keys:
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                if getattr(k, "value", None) == part:
-                    line, node = k.start_mark.line + 1, v
-                    break
-            else:
-                return line
-        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
-            if part >= len(node.value):
-                return line
-            node = node.value[part]
-            line = node.start_mark.line + 1
-        else:
-            return line
-    return line
 
 
 def save_config(config: GraderConfig, path: str | Path, *, header: str = "") -> Path:

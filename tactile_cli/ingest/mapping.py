@@ -38,10 +38,9 @@ import string
 from pathlib import Path
 from typing import Any, Literal, get_origin
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_file import read_yaml
+from ..config_file import key_line, read_yaml
 from ..errors import InputError
 from ..store.spec import load_spec
 
@@ -395,7 +394,7 @@ def load_mapping(path: str | Path) -> CsvMapping:
     except ValidationError as exc:
         err = _deepest(exc)
         keys = _keys_in_file(tuple(err["loc"]), raw, last_may_be_missing=err["type"] == "missing")
-        line = _line_of(text, keys) if keys else None
+        line = key_line(text, keys, start=1, skip_missing=True) if keys else None
         raise InputError(_describe(err, raw), path=path,
                          where=None if line is None else f"line {line}") from None
 
@@ -500,28 +499,6 @@ def _inner_model(annotation: Any) -> Any:
         if found is not None:
             return found
     return None
-
-
-def _line_of(text: str, loc: tuple[Any, ...]) -> int | None:
-    """1-based line of the YAML node at ``loc`` (the key itself for the last part)."""
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None
-    line = None if node is None else node.start_mark.line + 1
-    for part in loc:
-        if isinstance(node, yaml.MappingNode) and isinstance(part, str):
-            for key_node, value_node in node.value:
-                if getattr(key_node, "value", None) == part:
-                    line = key_node.start_mark.line + 1
-                    node = value_node
-                    break
-        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
-            if part >= len(node.value):
-                return line
-            node = node.value[part]
-            line = node.start_mark.line + 1
-    return line
 
 
 __all__ = ["CsvDialect", "CsvMapping", "SampleLabel", "Stream", "TimeBase", "TrialLayout",

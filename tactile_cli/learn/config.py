@@ -39,7 +39,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..config_file import read_yaml
+from ..config_file import key_line, read_yaml
 from ..errors import InputError
 
 #: Summary features of the MLP family, in the order they are computed (per channel).
@@ -297,7 +297,7 @@ def parse_config(raw: Any, *, path: str | Path | None = None, text: str | None =
         # an unknown key first: a misspelt key also makes the intended one "missing"
         err = max(errors, key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
         keys = _keys_in_file(tuple(err["loc"]), raw, missing=err["type"] == "missing")
-        line = _line_of(text, keys) if text and keys else None
+        line = key_line(text, keys) if text and keys else None
         raise InputError(_describe(err, keys), path=path,
                          where=None if line is None else f"line {line}") from None
 
@@ -362,32 +362,6 @@ def _describe(err: dict[str, Any], keys: tuple[Any, ...]) -> str:
     if not (isinstance(value, dict | list) or value is None or repr(value) in msg):
         shown = f" (got {value!r})"
     return f"`{key}`: {msg}{shown}"
-
-
-def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
-    """1-based line of the node at ``keys`` in the YAML text (via the composed node tree)."""
-    try:
-        node = yaml.compose(text)
-    except yaml.YAMLError:
-        return None
-    line = None
-    for part in keys:
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                if k.value == part:
-                    line = k.start_mark.line + 1
-                    node = v
-                    break
-            else:
-                return line
-        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
-            if part >= len(node.value):
-                return line
-            node = node.value[part]
-            line = node.start_mark.line + 1
-        else:
-            return line
-    return line
 
 
 __all__ = ["FAMILIES", "SUMMARY_FEATURES", "Cnn1dConfig", "Cnn2dSpectrogramConfig",

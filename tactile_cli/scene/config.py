@@ -15,7 +15,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -25,7 +24,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..config_file import read_yaml
+from ..config_file import key_line, read_yaml
 from ..errors import InputError
 
 
@@ -337,7 +336,7 @@ def load_scene_config(path: str | Path) -> SceneConfig:
         # an unknown key first: a misspelt key also leaves the intended one at its default
         err = max(errors, key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
         keys = tuple(part for part in err["loc"] if isinstance(part, str | int))
-        line = _line_of(text, keys)
+        line = key_line(text, keys)
         raise InputError(_describe(err), path=path,
                          where=None if line is None else f"line {line}") from None
 
@@ -365,32 +364,6 @@ def _allowed_keys(loc: tuple[Any, ...]) -> list[str]:
             return []
         model = annotation
     return list(model.model_fields)
-
-
-def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
-    """1-based line of the YAML key at ``keys`` (the deepest one present)."""
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None
-    line = None
-    for part in keys:
-        if isinstance(node, yaml.MappingNode):
-            for key_node, value_node in node.value:
-                if str(getattr(key_node, "value", None)) == str(part):
-                    line = key_node.start_mark.line + 1
-                    node = value_node
-                    break
-            else:
-                return line
-        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
-            if part >= len(node.value):
-                return line
-            node = node.value[part]
-            line = node.start_mark.line + 1
-        else:
-            return line
-    return line
 
 
 __all__ = ["SceneConfig", "TrialsConfig", "TimingConfig", "FosConfig", "SaturationConfig",

@@ -13,10 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_file import read_yaml
+from ..config_file import key_line, read_yaml
 from ..errors import InputError
 
 Range = tuple[float, float]
@@ -257,7 +256,7 @@ def load_synth_config(path: str | Path | None) -> SynthConfig:
     except ValidationError as exc:
         err = max(exc.errors(), key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
         keys = tuple(p for p in err["loc"] if isinstance(p, str | int))
-        line = _line_of(text, keys)
+        line = key_line(text, keys)
         raise InputError(_describe(err), path=path,
                          where=None if line is None else f"line {line}") from None
 
@@ -268,25 +267,6 @@ def _describe(err: dict[str, Any]) -> str:
     if err["type"] == "extra_forbidden":
         return f"unknown key `{key}`; see configs/synth_fos.yaml for the keys"
     return f"`{key}`: {msg}" if key else msg
-
-
-def _line_of(text: str, keys: tuple[Any, ...]) -> int | None:
-    """1-based line of the deepest YAML key of ``keys`` present in ``text``."""
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None
-    line = None
-    for part in keys:
-        if not isinstance(node, yaml.MappingNode):
-            return line
-        for key_node, value_node in node.value:
-            if str(getattr(key_node, "value", None)) == str(part):
-                line, node = key_node.start_mark.line + 1, value_node
-                break
-        else:
-            return line
-    return line
 
 
 __all__ = ["CentroidsConfig", "FitsConfig", "FosConfig", "InitialConfig", "LevelsConfig",
