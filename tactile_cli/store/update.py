@@ -30,16 +30,17 @@ from typing import Any
 import h5py
 
 from .._version import __version__
-from ..errors import InputError, SchemaError
+from ..errors import InputError
 from ..interrupt import raise_if_requested
 from .spec import load_spec
-from .validate import check_readable, validate_file
+from .validate import check_readable
 from .writer import (
     _LIVE_TEMPORARIES,
     _remove_stale_temporaries,
     current_command,
     safe_name,
     utc_now,
+    validate_and_swap,
 )
 
 #: Bytes per block when copying the file (the copy checks for an interrupt between blocks).
@@ -191,24 +192,9 @@ class DerivedUpdate:
             raise RuntimeError("the update is closed")
         self._h5.close()
         self._h5 = None
-        try:
-            report = validate_file(self.tmp)
-            if not report.ok:
-                lines = "; ".join(str(v) for v in report.violations[:5])
-                more = len(report.violations) - 5
-                raise SchemaError(
-                    f"{self.path}: the updated file would break the schema ({lines}"
-                    f"{f'; and {more} more' if more > 0 else ''}); the file was left unchanged"
-                )
-            with open(self.tmp, "rb") as f:  # the data reach the disk before the rename
-                os.fsync(f.fileno())
-            raise_if_requested()
-            os.replace(self.tmp, self.path)
-        except BaseException:
-            self.tmp.unlink(missing_ok=True)
-            raise
-        finally:
-            _LIVE_TEMPORARIES.discard(self.tmp)
+        validate_and_swap(self.tmp, self.path,
+                          breaks=f"{self.path}: the updated file would break the schema",
+                          outcome="the file was left unchanged")
         self._committed = True
         return self.path
 

@@ -22,7 +22,7 @@ import sys
 import threading
 import zlib
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,6 +120,30 @@ class Compression:
 
 #: gzip level 1 with shuffle: events at ~1/4 of raw size, fastest of the gzip levels
 DEFAULT_COMPRESSION = Compression()
+
+
+def validate_and_swap(tmp: Path, dest: Path, *, verified: Collection[str] = (), breaks: str,
+                      outcome: str) -> None:
+    """Validate the finished temporary file ``tmp``, flush it to disk and rename it over
+    ``dest`` in one ``os.replace``; on any error or interrupt delete ``tmp`` (``dest`` is
+    untouched) and re-raise. A schema violation is a :class:`SchemaError` "``breaks`` (the
+    first violations); ``outcome``". ``verified`` is passed to :func:`validate_file`."""
+    try:
+        report = validate_file(tmp, verified=verified)
+        if not report.ok:
+            lines = "; ".join(str(v) for v in report.violations[:5])
+            more = len(report.violations) - 5
+            raise SchemaError(f"{breaks} ({lines}{f'; and {more} more' if more > 0 else ''}); "
+                              f"{outcome}")
+        with open(tmp, "rb") as f:  # the data reach the disk before the rename
+            os.fsync(f.fileno())
+        raise_if_requested()
+        os.replace(tmp, dest)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    finally:
+        _LIVE_TEMPORARIES.discard(tmp)
 
 
 class StoreWriter:
@@ -226,24 +250,9 @@ class StoreWriter:
         )
         h5.close()
         self._h5 = None
-        try:
-            report = validate_file(self.tmp, verified=self.verified)
-            if not report.ok:
-                lines = "; ".join(str(v) for v in report.violations[:5])
-                more = len(report.violations) - 5
-                raise SchemaError(
-                    f"{self.out}: the file to be written breaks the schema ({lines}"
-                    f"{f'; and {more} more' if more > 0 else ''}); nothing was written"
-                )
-            with open(self.tmp, "rb") as f:  # the data reach the disk before the rename
-                os.fsync(f.fileno())
-            raise_if_requested()
-            os.replace(self.tmp, self.out)
-        except BaseException:
-            self.tmp.unlink(missing_ok=True)
-            raise
-        finally:
-            _LIVE_TEMPORARIES.discard(self.tmp)
+        validate_and_swap(self.tmp, self.out, verified=self.verified,
+                          breaks=f"{self.out}: the file to be written breaks the schema",
+                          outcome="nothing was written")
         self._committed = True
         return self.out
 
