@@ -1,4 +1,6 @@
-"""The tactile HDF5 store: schema spec, atomic writer, validator and readers."""
+"""The tactile HDF5 store: schema spec, atomic writer, validator and the one trial reader
+(:class:`TactileFile` hands out :class:`Trial` objects; nothing outside ``store/`` imports
+h5py)."""
 
 from .reader import FileSummary as FileSummary
 from .reader import read_events as read_events
@@ -7,6 +9,15 @@ from .reader import read_signal as read_signal
 from .reader import summarize as summarize
 from .reader import trial_names as trial_names
 from .spec import load_spec as load_spec
+from .trials import Annotation as Annotation
+from .trials import EventWindow as EventWindow
+from .trials import Frames as Frames
+from .trials import Sensor as Sensor
+from .trials import Signal as Signal
+from .trials import TactileFile as TactileFile
+from .trials import Trial as Trial
+from .trials import TrialEvents as TrialEvents
+from .trials import open_file as open_file
 from .validate import ValidationReport as ValidationReport
 from .validate import Violation as Violation
 from .validate import validate_file as validate_file

@@ -11,19 +11,8 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from .trials import TactileFile, attr_value
 from .validate import check_readable
-
-
-def attr_value(value: Any) -> Any:
-    """An HDF5 attribute (or string dataset element) as a plain Python value: bytes
-    decoded as UTF-8, numpy scalars as Python scalars, arrays as lists of such values."""
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.ndarray):
-        return [attr_value(v) for v in value.tolist()]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
 
 
 def open_tactile(path: str | Path) -> h5py.File:
@@ -92,8 +81,8 @@ class FileSummary:
 
 def summarize(path: str | Path) -> FileSummary:
     """Summarise a tactile file (sensors, trials, labels, durations)."""
-    version = check_readable(path)
-    with h5py.File(path, "r") as h5:
+    with open_tactile(path) as h5:
+        version = str(attr_value(h5.attrs.get("schema_version", "")))
         a = h5.attrs
         summary = FileSummary(
             file=str(path),
@@ -143,48 +132,40 @@ def summarize(path: str | Path) -> FileSummary:
 
 
 def trial_names(path: str | Path) -> list[str]:
-    check_readable(path)
-    with h5py.File(path, "r") as h5:
-        return list(h5["trials"].keys())
+    """Names of the trials of a tactile file, in file order."""
+    with TactileFile(path) as f:
+        return f.trial_names
 
 
 def read_events(path: str | Path, trial: str) -> dict[str, np.ndarray]:
     """All events of one trial as arrays ``x, y, t, p`` (see the schema for dtypes)."""
-    check_readable(path)
-    with h5py.File(path, "r") as h5:
-        g = h5[f"trials/{trial}/events"]
-        return {k: g[k][()] for k in ("x", "y", "t", "p")}
+    with TactileFile(path) as f:
+        ev = f.trial(trial).events
+        g = ev.slice(0, ev.n_events)
+        # the stored dtypes (uint16 x/y), not the int64 of an EventWindow
+        return {"x": g.x.astype(np.uint16), "y": g.y.astype(np.uint16), "t": g.t_us,
+                "p": g.p}
 
 
 def read_events_window(
     path: str | Path, trial: str, t0_ms: int, t1_ms: int
 ) -> dict[str, np.ndarray]:
-    """Events with ``origin + t0_ms <= t < origin + t1_ms`` through the millisecond index."""
-    check_readable(path)
-    with h5py.File(path, "r") as h5:
-        g = h5[f"trials/{trial}/events"]
-        idx = g["ms_to_idx"]
-        n = g["t"].shape[0]
-        lo = int(idx[t0_ms]) if t0_ms < idx.shape[0] else n
-        hi = int(idx[t1_ms]) if t1_ms < idx.shape[0] else n
-        return {k: g[k][lo:hi] for k in ("x", "y", "t", "p")}
+    """Events of ``[t0_ms, t1_ms)`` milliseconds from the trial's time origin (events
+    attribute ``t_origin_us``, else the first event), through the millisecond index; the
+    same origin as :meth:`~tactile_cli.store.trials.TrialEvents.window`."""
+    with TactileFile(path) as f:
+        ev = f.trial(trial).events
+        w = ev.window_us(ev.origin_us + 1000 * int(t0_ms), ev.origin_us + 1000 * int(t1_ms))
+        return {"x": w.x.astype(np.uint16), "y": w.y.astype(np.uint16), "t": w.t_us, "p": w.p}
 
 
 def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
-    """One sampled stream: ``data`` (n, c) float32, ``t_s`` (n,), ``sample_labels`` dict."""
-    check_readable(path)
-    with h5py.File(path, "r") as h5:
-        g = h5[f"trials/{trial}/signals/{stream}"]
-        labels = {}
-        if "sample_labels" in g:
-            for k, ds in g["sample_labels"].items():
-                labels[k] = ds[()]
-        return {
-            "data": g["data"][()],
-            "t_s": g["t_s"][()],
-            "sensor": attr_value(g.attrs["sensor"]),
-            "sample_labels": labels,
-        }
+    """One sampled stream: ``data`` (n, c) float32, ``t_s`` (n,), ``sensor`` and
+    ``sample_labels`` (name -> values)."""
+    with TactileFile(path) as f:
+        s = f.trial(trial).signal(stream)
+        return {"data": s.data, "t_s": s.t_s, "sensor": s.sensor.name,
+                "sample_labels": {k: v.values for k, v in s.sample_labels.items()}}
 
 
 #: Source-file suffixes that mark a file as derived from another tactile HDF5 file.
@@ -200,8 +181,7 @@ def recording_hashes(path: str | Path, own_sha256: str) -> list[str]:
     ``.h5``/``.hdf5``). Any other file (ingested from raw recordings, or made by ``tactile
     synth``) is its own recording: ``[own_sha256]``.
     """
-    check_readable(path)
-    with h5py.File(path, "r") as h5:
+    with open_tactile(path) as h5:
         if "provenance/sources/path" not in h5:
             return [own_sha256]
         paths = [attr_value(p) for p in h5["provenance/sources/path"][()]]

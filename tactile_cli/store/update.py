@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeAlias
 
 import h5py
+import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
@@ -36,6 +37,7 @@ from .spec import load_spec
 from .validate import check_readable
 from .writer import (
     _LIVE_TEMPORARIES,
+    _STR,
     _remove_stale_temporaries,
     current_command,
     safe_name,
@@ -45,11 +47,37 @@ from .writer import (
 
 #: Bytes per block when copying the file (the copy checks for an interrupt between blocks).
 COPY_BLOCK = 1 << 24
+#: A writable ``/derived/{kind}/{name}`` group, as :meth:`DerivedUpdate.group` hands it out
+#: (fill it with :func:`write_columns`, so callers outside ``store/`` need no h5py).
+DerivedGroup: TypeAlias = h5py.Group
 
 
 def derived_path(kind: str, name: str) -> str:
     """The HDF5 path ``/derived/{kind}/{name}``."""
     return f"/derived/{kind}/{name}"
+
+
+def write_columns(
+    group: DerivedGroup,
+    columns: Mapping[str, np.ndarray | Sequence[Any]],
+    *,
+    strings: Collection[str] = (),
+    attrs: Mapping[str, Any] | None = None,
+) -> None:
+    """Write ``columns`` as datasets of ``group`` (e.g. from :meth:`DerivedUpdate.group`),
+    in the mapping's order, then set ``attrs`` on the group.
+
+    Columns named in ``strings`` are stored with HDF5's variable-length UTF-8 string dtype
+    (what :meth:`TactileFile.derived <tactile_cli.store.trials.TactileFile.derived>` decodes
+    with ``strings=``); the others with their numpy dtype.
+    """
+    for key, values in columns.items():
+        if key in strings:
+            group.create_dataset(key, data=np.asarray(values, dtype=object), dtype=_STR)
+        else:
+            group.create_dataset(key, data=values)
+    for key, value in (attrs or {}).items():
+        group.attrs[key] = value
 
 
 def check_derived_targets(
@@ -79,7 +107,7 @@ def check_derived_targets(
         raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
     if existing and not overwrite:
         raise InputError(
-            f"{existing[0]} exists already; pass --overwrite to replace it", path=path
+            f"{existing[0]} exists already; pass `overwrite=True` to replace it", path=path
         )
 
 
@@ -168,7 +196,7 @@ class DerivedUpdate:
         if not self._committed:
             self.abort()
 
-    def group(self, kind: str, name: str) -> h5py.Group:
+    def group(self, kind: str, name: str) -> DerivedGroup:
         """The new (empty, provenance-stamped) group ``/derived/{kind}/{name}`` of the copy."""
         if (kind, name) not in self._groups:
             raise KeyError(f"({kind!r}, {name!r}) is not a target of this update; targets: "

@@ -35,6 +35,7 @@ from .._version import __version__
 from ..errors import InputError, SchemaError
 from ..interrupt import raise_if_requested
 from .spec import load_spec
+from .trials import attr_value
 from .validate import validate_file
 
 #: Events per chunk of a 1-D event column (the t column: 512 KiB before compression). A
@@ -173,7 +174,7 @@ class StoreWriter:
     ):
         self.out = Path(out)
         if self.out.exists() and not overwrite:
-            raise InputError("output exists; pass --overwrite to replace it", path=self.out)
+            raise InputError("output exists; pass `overwrite=True` to replace it", path=self.out)
         if self.out.is_dir():
             raise InputError("output is a folder; give a file name ending in .h5", path=self.out)
         if not self.out.parent.exists():
@@ -349,18 +350,23 @@ class StoreWriter:
         lab = group.create_group("labels")
         for key, value in (labels or {}).items():
             lab.attrs[safe_name(key)] = value
+        writer = TrialWriter(self, group)
         if annotations:
-            ann = group.create_group("annotations")
-            ann.create_dataset(
-                "start_s", data=np.array([a[0] for a in annotations], dtype=np.float64)
-            )
-            ann.create_dataset(
-                "end_s", data=np.array([a[1] for a in annotations], dtype=np.float64)
-            )
-            ann.create_dataset(
-                "label", data=np.array([a[2] for a in annotations], dtype=object), dtype=_STR
-            )
-        return TrialWriter(self, group)
+            writer.set_annotations(annotations)
+        return writer
+
+    @property
+    def trial_names(self) -> list[str]:
+        """Names of the trials started so far, in the order they were started."""
+        return list(self.h5["trials"].keys())
+
+    def trial_writer(self, name: str) -> TrialWriter:
+        """The writer of trial ``name``, started earlier (by a format reader, say), to add
+        labels or annotations to it; KeyError when no trial of that name was started."""
+        trials = self.h5["trials"]
+        if name not in trials:
+            raise KeyError(f"no trial {name!r} in the file being written")
+        return TrialWriter(self, trials[name])
 
 
 class TrialWriter:
@@ -387,6 +393,32 @@ class TrialWriter:
     def set_labels(self, **labels: str | int | float) -> None:
         for key, value in labels.items():
             self.group["labels"].attrs[safe_name(key)] = value
+
+    @property
+    def labels(self) -> dict[str, Any]:
+        """The labels set so far, decoded as :func:`~tactile_cli.store.trials.attr_value`
+        does (bytes as str, numpy scalars as Python ones)."""
+        return {k: attr_value(v) for k, v in self.group["labels"].attrs.items()}
+
+    @property
+    def has_annotations(self) -> bool:
+        """Whether the trial's annotations were written (they are written once)."""
+        return "annotations" in self.group
+
+    def set_annotations(self, annotations: Sequence[tuple[float, float, str]]) -> None:
+        """Write the trial's annotated intervals ``(start_s, end_s, label)``, seconds from
+        the trial's time origin, in the order given (``/trials/<trial>/annotations``:
+        ``start_s``, ``end_s`` float64, ``label`` UTF-8 strings). ValueError when the trial
+        already has annotations."""
+        if self.has_annotations:
+            raise ValueError(f"trial {self.name!r} already has annotations")
+        ann = self.group.create_group("annotations")
+        ann.create_dataset("start_s", data=np.array([a[0] for a in annotations],
+                                                    dtype=np.float64))
+        ann.create_dataset("end_s", data=np.array([a[1] for a in annotations],
+                                                  dtype=np.float64))
+        ann.create_dataset("label", data=np.array([a[2] for a in annotations], dtype=object),
+                           dtype=_STR)
 
     def events(self, sensor: str) -> EventAppender:
         """An appender for this trial's event stream from ``sensor`` (an event camera)."""

@@ -90,7 +90,7 @@ def test_ms_index_window_matches_brute_force(tmp_path):
 def test_existing_output_needs_overwrite(tmp_path):
     out = tmp_path / "a.h5"
     out.write_bytes(b"old")
-    with pytest.raises(InputError, match="output exists; pass --overwrite"):
+    with pytest.raises(InputError, match="output exists; pass `overwrite=True`"):
         StoreWriter(out)
     assert out.read_bytes() == b"old"
 

@@ -113,7 +113,7 @@ def test_existing_group_needs_overwrite(h5file):
         with update_derived(h5file, "fits", "fos_press"):
             pass
     assert str(exc.value) == (f"{h5file}: /derived/fits/fos_press exists already; "
-                              "pass --overwrite to replace it")
+                              "pass `overwrite=True` to replace it")
     assert _digest(h5file) == before
     with update_derived(h5file, "fits", "fos_press", overwrite=True) as g:
         g.create_dataset("tau_s", data=[0.3])
