@@ -32,12 +32,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..vocabulary import ACTIONS, BIN_S
 from .models import pulse_response, ramp_response
-
-#: Action classes in label order (per-bin labels are indices into this tuple).
-ACTIONS: tuple[str, ...] = ("approach", "press", "slip", "release")
-#: Default bin width of the event counts, seconds (the paper's 20 ms).
-BIN_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -82,7 +78,8 @@ class ActionTimeline:
         return [(float(b[i]), float(b[i + 1]), ACTIONS[i]) for i in range(len(ACTIONS))]
 
     def labels(self, t_s: np.ndarray) -> np.ndarray:
-        """(n,) int8 action index (into :data:`ACTIONS`) at each time ``t_s`` (seconds)."""
+        """(n,) int8 action index (into :data:`tactile_cli.vocabulary.ACTIONS`) at each time
+        ``t_s`` (seconds)."""
         edges = self.boundaries_s[1:4]
         return np.searchsorted(edges, np.asarray(t_s, dtype=np.float64), side="right").astype(
             np.int8)
@@ -170,5 +167,5 @@ def saturate(counts: np.ndarray, limit: float | None) -> np.ndarray:
     return limit * np.tanh(np.asarray(counts, dtype=np.float64) / limit)
 
 
-__all__ = ["ACTIONS", "BIN_S", "ActionTimeline", "FosActionParams", "bin_centres_s",
+__all__ = ["ActionTimeline", "FosActionParams", "bin_centres_s",
            "net_count_components", "expected_net_counts", "saturate"]

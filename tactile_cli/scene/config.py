@@ -26,6 +26,7 @@ from pydantic import (
 
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
+from ..vocabulary import BIN_S
 
 
 class _Model(BaseModel):
@@ -257,7 +258,7 @@ class StripsConfig(_Model):
 class SceneConfig(_Model):
     """The whole marker-event scene."""
 
-    bin_s: float = Field(default=0.02, gt=0, le=1)
+    bin_s: float = Field(default=BIN_S, gt=0, le=1)
     """Bin width of the expected counts, seconds (the paper's 20 ms); whole microseconds."""
     trials: TrialsConfig = Field(default_factory=TrialsConfig)
     """Groups and force levels."""

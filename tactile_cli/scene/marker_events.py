@@ -115,7 +115,7 @@ def simulate_marker_events(
     started = time.perf_counter()
     progress = progress or NullProgress()
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"--seed (={seed!r}) must be a non-negative integer")
+        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
     seed = int(seed)
     out = Path(out_dir)
     _check_output(out, overwrite)
@@ -160,8 +160,8 @@ def _check_output(out: Path, overwrite: bool) -> None:
     if out.exists() and not out.is_dir():
         raise InputError("output exists and is not a folder; give a folder name", path=out)
     if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise InputError("output folder exists and is not empty; pass --overwrite to replace "
-                         "it", path=out)
+        raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
+                         "replace it", path=out)
     if not out.parent.is_dir():
         raise InputError("the output's parent folder does not exist", path=out.parent)
 
@@ -191,7 +191,7 @@ def _move_into_place(tmp: Path, out: Path, overwrite: bool) -> None:
             os.close(fd)
     if out.is_dir() and any(out.iterdir()):
         if not overwrite:  # appeared while we simulated
-            raise InputError("output folder exists and is not empty; pass --overwrite to "
+            raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
                              "replace it", path=out)
         old = out.with_name(f".{out.name}.old-{os.getpid()}")
         shutil.rmtree(old, ignore_errors=True)

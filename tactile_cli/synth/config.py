@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
+from ..vocabulary import BIN_S
 
 Range = tuple[float, float]
 
@@ -214,7 +215,7 @@ class CentroidsConfig(_Model):
 class SynthConfig(_Model):
     """Everything ``tactile synth`` draws from (see configs/synth_fos.yaml)."""
 
-    bin_s: float = Field(default=0.02, gt=0, le=1)
+    bin_s: float = Field(default=BIN_S, gt=0, le=1)
     """Bin width of the event counts, s (the paper's 20 ms)."""
     width_px: int = Field(default=640, ge=1)
     """Sensor geometry recorded on the event_counts sensor (the paper's 640 x 480)."""

@@ -43,7 +43,7 @@ class SynthTrial:
 
     t_s: (n_bins,) bin centres, s. expected: (n_bins,) expected net events per bin.
     net: (n_bins,) float64 net events per bin with noise. labels: (n_bins,) int8 action
-    index per bin (into :data:`tactile_cli.fos.actions.ACTIONS`). centroids: the ROI
+    index per bin (into :data:`tactile_cli.vocabulary.ACTIONS`). centroids: the ROI
     centroid trajectories (:mod:`tactile_cli.synth.centroids`) when requested, else None.
     """
 

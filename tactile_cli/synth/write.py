@@ -22,9 +22,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..fos.actions import ACTIONS
 from ..progress import NullProgress, Progress
 from ..store.writer import StoreWriter
+from ..vocabulary import ACTIONS
 from .centroids import CentroidModel
 from .trajectories import SynthTrial
 

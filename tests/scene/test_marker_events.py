@@ -261,7 +261,7 @@ def test_refuses_a_non_empty_folder_and_overwrites_atomically(tmp_path):
     out.mkdir()  # an empty folder is fine
     simulate_marker_events(config, out, seed=0, command="c")
     before = _files(out)
-    with pytest.raises(InputError, match="not empty; pass --overwrite"):
+    with pytest.raises(InputError, match="not empty; pass `overwrite=True`"):
         simulate_marker_events(config, out, seed=1, command="c")
     assert _files(out) == before
     (out / "stray.txt").write_text("old")
