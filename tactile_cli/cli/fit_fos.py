@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import enum
 import json
-import os
 import sys
 from collections import Counter
 from pathlib import Path
@@ -15,7 +14,14 @@ from rich.console import Console
 from rich.table import Table
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ..fos.compile_cache import enable_compilation_cache
+from ._errors import Flag, run_guarded, seconds_as_ms
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "bin_s": ("--bin-ms", seconds_as_ms),
+    "regions": "--regions",
+}
 
 
 class Kind(enum.StrEnum):
@@ -43,25 +49,6 @@ class CurveModel(enum.StrEnum):
 
 #: Rows of the table printed in full; beyond it converged rows are elided (failed never are).
 MAX_ROWS = 60
-
-
-def compilation_cache_dir() -> Path:
-    """Where JAX keeps compiled solvers between runs: ``$TACTILE_CACHE_DIR/jax``, else
-    ``~/.cache/tactile/jax``."""
-    root = os.environ.get("TACTILE_CACHE_DIR")
-    return (Path(root) if root else Path.home() / ".cache" / "tactile") / "jax"
-
-
-def enable_compilation_cache() -> Path:
-    """Turn on JAX's persistent compilation cache, so later runs skip XLA compilation."""
-    import jax
-
-    cache = compilation_cache_dir()
-    cache.mkdir(parents=True, exist_ok=True)
-    jax.config.update("jax_compilation_cache_dir", str(cache))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    return cache
 
 
 def _pm(value: Any, se: Any, fmt: str) -> str:
@@ -177,13 +164,13 @@ def fit_fos_command(
     """
 
     def body() -> None:
-        import h5py
+        from ..store.trials import is_hdf5
 
         if not file.is_file():
             raise InputError("file not found", path=file)
         if csv_out is not None and csv_out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
-        is_h5 = h5py.is_hdf5(file)
+        is_h5 = is_hdf5(file)
         if is_h5:
             if model is not None:
                 raise InputError("--model applies to CSV curves; an HDF5 file's press regions "
@@ -276,7 +263,7 @@ def fit_fos_command(
         if figures:
             console.print(f"wrote {len(figures)} figure(s) to {plot}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)
 
 
 class _Status:

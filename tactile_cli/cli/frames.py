@@ -48,7 +48,8 @@ def frames_command(
         from ..spatial.config import load_config
         from ..spatial.provenance import png_meta, provenance, write_json
         from ..spatial.render import KINDS, write_trial_frames
-        from ..spatial.trial_events import TrialEvents, trial_list
+        from ..spatial.trial_events import event_trial_names, spatial_events
+        from ..store.trials import TactileFile
 
         if not file.exists():
             raise InputError("file not found", path=file)
@@ -63,36 +64,40 @@ def frames_command(
             raise InputError(f"--end-s (={end_s:g}) must be later than --start-s "
                              f"(={start_s:g})")
         config = load_config(rois) if rois is not None else None
-        names = list(trial) if trial else trial_list(file)
-        if not names:
-            raise InputError("no trial with events", path=file)
-        for name in names:  # every input checked before the first PNG is written
-            with TrialEvents(file, name) as te:
+        with TactileFile(file) as tf:
+            names = list(trial) if trial else event_trial_names(tf)
+            if not names:
+                raise InputError("no trial with events", path=file)
+            chosen = []
+            for name in names:  # every input checked before the first PNG is written
+                chosen.append(tf.trial(name))
+                te = spatial_events(chosen[-1])
                 if config is not None:
                     config.check_sensor(te.sensor.width_px, te.sensor.height_px)
-            target = out / name
-            if target.exists() and any(target.glob("*.png")) and not overwrite:
-                raise InputError("holds PNGs of an earlier run; pass --overwrite to replace "
-                                 "them", path=target)
-        options = {"window_ms": window_ms, "median": median, "kind": kind, "start_s": start_s,
-                   "end_s": end_s, "sheet_max": sheet_max, "sheet_only": sheet_only,
-                   "trials": names, "rois": None if config is None else config.as_dict()}
-        record = provenance([file], options)
-        meta = png_meta(record)
-        out.mkdir(parents=True, exist_ok=True)
-        written = []
-        for name in names:
-            target = out / name
-            target.mkdir(parents=True, exist_ok=True)
-            for old in target.glob("frame_*.png"):
-                old.unlink()
-            summary = write_trial_frames(
-                file, name, target, window_s=window_ms * 1e-3, median=median, kind=kind,
-                rois=() if config is None else config.rois, start_s=start_s, end_s=end_s,
-                sheet_max=sheet_max, frame_pngs=not sheet_only, meta=meta,
-            )
-            summary["folder"] = str(target)
-            written.append(summary)
+                target = out / name
+                if target.exists() and any(target.glob("*.png")) and not overwrite:
+                    raise InputError("holds PNGs of an earlier run; pass --overwrite to "
+                                     "replace them", path=target)
+            options = {"window_ms": window_ms, "median": median, "kind": kind,
+                       "start_s": start_s, "end_s": end_s, "sheet_max": sheet_max,
+                       "sheet_only": sheet_only, "trials": names,
+                       "rois": None if config is None else config.as_dict()}
+            record = provenance([file], options)
+            meta = png_meta(record)
+            out.mkdir(parents=True, exist_ok=True)
+            written = []
+            for name, tr in zip(names, chosen, strict=True):
+                target = out / name
+                target.mkdir(parents=True, exist_ok=True)
+                for old in target.glob("frame_*.png"):
+                    old.unlink()
+                summary = write_trial_frames(
+                    tr, target, window_s=window_ms * 1e-3, median=median,
+                    kind=kind, rois=() if config is None else config.rois, start_s=start_s,
+                    end_s=end_s, sheet_max=sheet_max, frame_pngs=not sheet_only, meta=meta,
+                )
+                summary["folder"] = str(target)
+                written.append(summary)
         record["outputs"] = written
         write_json(out / "frames.json", record)
         if as_json:

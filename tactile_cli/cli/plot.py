@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import run_guarded
 
 
@@ -24,10 +23,11 @@ def plot_command(
 
     def body() -> None:
         from ..plots.quicklook import write_html  # matplotlib loads only when plotting
+        from ..store.trials import TactileFile
 
-        for f in files:
-            if not f.exists():
-                raise InputError("file not found", path=f)
+        for f in files:  # every input opens (schema gate included) before --out is made
+            with TactileFile(f):
+                pass
         out.mkdir(parents=True, exist_ok=True)
         page = write_html(list(files), out, max_trials=max_trials)
         typer.echo(f"wrote {page}")

@@ -12,7 +12,6 @@ from .accumulate import EventCounts as EventCounts
 from .accumulate import bin_events as bin_events
 from .accumulate import counts_to_labels as counts_to_labels
 from .accumulate import moving_average as moving_average
-from .accumulate import read_annotations as read_annotations
 from .accumulate import trial_counts as trial_counts
 from .recording import FileAccumulation as FileAccumulation
 from .recording import TrialAccumulation as TrialAccumulation

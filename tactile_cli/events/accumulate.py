@@ -6,11 +6,13 @@ press, slip, release), and a moving average smooths it. This module is that accu
 
 - :func:`bin_events`: events in, :class:`EventCounts` out (vectorised, one ``np.bincount``
   per block of events);
-- :func:`trial_counts`: the same for one trial of a tactile HDF5 file, reading its events
-  in blocks of at most :data:`READ_BLOCK` events so memory stays bounded;
+- :func:`trial_counts`: the same for one :class:`~tactile_cli.store.trials.Trial` of an
+  open tactile HDF5 file, reading its events in blocks of at most :data:`READ_BLOCK`
+  events so memory stays bounded;
 - :func:`moving_average`: centred moving average whose window shrinks symmetrically at
   the edges (no zero padding, so no bias towards zero at the trial's ends);
-- :func:`counts_to_labels`: per-bin action labels from a trial's annotations.
+- :func:`counts_to_labels`: per-bin action labels from a trial's annotations
+  (:attr:`Trial.annotations <tactile_cli.store.trials.Trial.annotations>`).
 
 Times: event timestamps ``t_us`` are integer microseconds of the camera clock; bin
 centres ``t_s`` are seconds from the trial's time origin (the event timestamp
@@ -22,20 +24,19 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..fos.actions import ACTIONS, BIN_S
-from ..store.reader import open_tactile
+from ..store.trials import READ_BLOCK
+from ..vocabulary import BIN_S, action_index
+
+if TYPE_CHECKING:
+    from ..store.trials import Trial
 
 #: Channel order of :meth:`EventCounts.stack` (and of the ``event_counts`` HDF5 stream).
 CHANNELS: tuple[str, ...] = ("positive", "negative", "net")
-#: Events read from an HDF5 file per block (9 MiB of t and p columns).
-READ_BLOCK = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -160,94 +161,37 @@ def bin_events(
     return _counts(raw, bin_s, start_us, n_outside)
 
 
-def unknown_trial(path: str | Path, trial: str, names: Sequence[str]) -> InputError:
-    """The error for a trial name that is not in the file, listing (some of) its trials."""
-    shown = ", ".join(names[:10]) + (f" and {len(names) - 10} more" if len(names) > 10 else "")
-    return InputError(f"no trial {trial!r}; the file has {len(names)} trial(s): "
-                      f"{shown or 'none'}", path=path)
+def trial_counts(trial: Trial, *, bin_s: float = BIN_S) -> EventCounts:
+    """Event counts per bin of one trial of an open tactile HDF5 file.
 
-
-def _open_trial_events(h5: h5py.File, path: str | Path, trial: str) -> h5py.Group:
-    trials = h5["trials"]
-    if trial not in trials:
-        raise unknown_trial(path, trial, list(trials.keys()))
-    group = trials[trial]
-    if "events" not in group:
-        raise InputError(
-            "trial has no events (event counts need an event-camera recording)",
-            path=path, where=f"/trials/{trial}",
-        )
-    events = group["events"]
-    if events["t"].shape[0] == 0:
-        raise InputError("trial has no events", path=path, where=f"/trials/{trial}/events")
-    return events
-
-
-def trial_origin_us(events: h5py.Group) -> int:
-    """Event timestamp of a trial's time 0: attribute ``t_origin_us``, else
-    ``ms_index_origin_us`` (the first event)."""
-    if "t_origin_us" in events.attrs:
-        return int(events.attrs["t_origin_us"])
-    return int(events.attrs["ms_index_origin_us"])
-
-
-def trial_counts(path: str | Path, trial: str, *, bin_s: float = BIN_S) -> EventCounts:
-    """Event counts per bin of one trial of a tactile HDF5 file.
-
-    The bins start at the trial's time origin (events attribute ``t_origin_us``, else
-    ``ms_index_origin_us``, the first event, as in files written before that attribute)
-    and cover ``[0, duration_s)`` of the trial, or up to the last event when that lies
-    later; the last bin is partial when that span is not a whole number of bins. Events
-    before the origin are not counted (``n_outside``). Events are read in blocks of
+    The bins start at the trial's time origin (:attr:`TrialEvents.origin_us
+    <tactile_cli.store.trials.TrialEvents.origin_us>`: events attribute ``t_origin_us``,
+    else ``ms_index_origin_us``, the first event, as in files written before that
+    attribute) and cover ``[0, duration_s)`` of the trial, or up to the last event when
+    that lies later; the last bin is partial when that span is not a whole number of bins.
+    Events before the origin are not counted (``n_outside``). Events are read in blocks of
     :data:`READ_BLOCK`, the first located with ``ms_to_idx``, so memory is bounded by the
-    block size and the counts. Raises :class:`InputError` for a
-    file that is not a tactile file, an unknown trial or a trial without events.
+    block size and the counts. Raises :class:`InputError` for a trial without events.
     """
-    path = Path(path)
     bin_us = bin_us_of(bin_s)
-    with open_tactile(path) as h5:
-        events = _open_trial_events(h5, path, trial)
-        origin_us = trial_origin_us(events)
-        index_origin_us = int(events.attrs["ms_index_origin_us"])
-        t_ds, p_ds = events["t"], events["p"]
-        n = t_ds.shape[0]
-        t_last = int(t_ds[n - 1])
-        duration_us = round(float(h5["trials"][trial].attrs["duration_s"]) * 1e6)
-        end_us = max(origin_us + duration_us, t_last + 1)
-        n_bins = -(-(end_us - origin_us) // bin_us)
-        ms_to_idx = events["ms_to_idx"]  # one int64 per ms: read one entry, not all
-
-        def first_index_at_or_after_ms(ms: int) -> int:
-            if ms <= 0:
-                return 0
-            return int(ms_to_idx[ms]) if ms < ms_to_idx.shape[0] else n
-
-        # events before the origin are skipped whole milliseconds at a time (the block
-        # filter drops the rest); every event is counted or reported in n_outside
-        lo = first_index_at_or_after_ms((origin_us - index_origin_us) // 1000)
-        raw = np.zeros((n_bins, 2), dtype=np.int64)
-        n_outside = lo
-        for a in range(lo, n, READ_BLOCK):
-            b = min(a + READ_BLOCK, n)
-            n_outside += _accumulate(t_ds[a:b], p_ds[a:b], origin_us, end_us, bin_us, raw)
+    if not trial.has_events:
+        raise InputError("trial has no events (event counts need an event-camera recording)",
+                         path=trial.path, where=trial.where)
+    events = trial.events
+    if events.n_events == 0:
+        raise InputError("trial has no events", path=trial.path, where=events.where)
+    origin_us = events.origin_us
+    duration_us = round(trial.duration_s * 1e6)
+    end_us = max(origin_us + duration_us, events.t_last_us + 1)
+    n_bins = -(-(end_us - origin_us) // bin_us)
+    # events before the origin are skipped without being read; every event is counted or
+    # reported in n_outside
+    lo = events.index_at_or_after(origin_us)
+    raw = np.zeros((n_bins, 2), dtype=np.int64)
+    n_outside = lo
+    for t_us, p in events.blocks(lo, READ_BLOCK):
+        n_outside += _accumulate(t_us, p, origin_us, end_us, bin_us, raw)
     return _counts(raw, bin_s, origin_us, n_outside)
-
-
-def read_annotations(path: str | Path, trial: str) -> list[tuple[float, float, str]]:
-    """``(start_s, end_s, label)`` of one trial's annotations (empty when it has none)."""
-    path = Path(path)
-    with open_tactile(path) as h5:
-        if trial not in h5["trials"]:
-            raise unknown_trial(path, trial, list(h5["trials"].keys()))
-        group = h5["trials"][trial]
-        if "annotations" not in group:
-            return []
-        ann = group["annotations"]
-        starts = ann["start_s"][()]
-        ends = ann["end_s"][()]
-        labels = ann["label"].asstr()[()]
-    return [(float(s), float(e), str(lab)) for s, e, lab in zip(starts, ends, labels,
-                                                                strict=True)]
 
 
 def moving_average(x: np.ndarray, window_bins: int) -> np.ndarray:
@@ -280,24 +224,24 @@ def moving_average(x: np.ndarray, window_bins: int) -> np.ndarray:
 def counts_to_labels(
     t_s: np.ndarray, annotations: Sequence[tuple[float, float, str]]
 ) -> np.ndarray:
-    """(n_bins,) int8 action index (into ``ACTIONS``) of each bin, by its centre ``t_s``.
+    """(n_bins,) int8 action index (into :data:`~tactile_cli.vocabulary.ACTIONS`) of each
+    bin, by its centre ``t_s``.
 
     annotations: ``(start_s, end_s, label)`` intervals, a bin belonging to the interval
-    with ``start_s <= t_s < end_s``. Labels are matched to ``ACTIONS`` ignoring case and
-    surrounding spaces; annotations of other labels are not action regions and are
-    skipped. Bins inside no action interval get -1. Where intervals overlap, the later
-    annotation wins.
+    with ``start_s <= t_s < end_s``. Labels are matched to the actions ignoring case and
+    surrounding spaces (:func:`~tactile_cli.vocabulary.action_index`); annotations of other
+    labels are not action regions and are skipped. Bins inside no action interval get -1.
+    Where intervals overlap, the later annotation wins.
     """
     t_s = np.asarray(t_s, dtype=np.float64)
     labels = np.full(t_s.shape, -1, dtype=np.int8)
     for start_s, end_s, label in annotations:
-        name = str(label).strip().lower()
-        if name not in ACTIONS:
+        index = action_index(label)
+        if index is None:
             continue
-        labels[(t_s >= start_s) & (t_s < end_s)] = ACTIONS.index(name)
+        labels[(t_s >= start_s) & (t_s < end_s)] = index
     return labels
 
 
 __all__ = ["CHANNELS", "READ_BLOCK", "EventCounts", "bin_events", "bin_us_of",
-           "counts_to_labels", "moving_average", "read_annotations", "trial_counts",
-           "trial_origin_us", "unknown_trial"]
+           "counts_to_labels", "moving_average", "trial_counts"]

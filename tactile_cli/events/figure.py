@@ -17,8 +17,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..fos.actions import ACTIONS  # noqa: E402
 from ..store.writer import safe_name  # noqa: E402
+from ..vocabulary import ACTIONS, action_index  # noqa: E402
 from .recording import TrialAccumulation  # noqa: E402
 
 REGION_COLOURS = {"approach": "#e8e8e8", "press": "#cfe8ff", "slip": "#ffe0c2",
@@ -37,8 +37,8 @@ def plot_trial(acc: TrialAccumulation, out_dir: str | Path) -> Path:
     c = acc.counts
     seg = acc.segmentation
     if acc.true_labels is not None:
-        shaded = [a for a in acc.annotations if a[2].strip().lower() in ACTIONS]
-        shaded = [(s, e, lab.strip().lower()) for s, e, lab in shaded]
+        shaded = [(s, e, ACTIONS[i]) for s, e, lab in acc.annotations
+                  if (i := action_index(lab)) is not None]
         source = "annotated regions"
     elif seg is not None and seg.status != "failed":
         shaded, source = seg.intervals(), "detected regions"

@@ -19,23 +19,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..fos.actions import ACTIONS, BIN_S
 from ..progress import NullProgress, Progress
-from ..store.reader import attr_value, open_tactile
+from ..store.trials import Annotation, TactileFile, Trial
 from ..store.writer import StoreWriter
+from ..vocabulary import ACTIONS, BIN_S
 from .accumulate import (
     CHANNELS,
     EventCounts,
     bin_us_of,
     counts_to_labels,
     moving_average,
-    read_annotations,
     trial_counts,
-    unknown_trial,
 )
 from .segment import Segmentation, SegmentationScore, segment_actions, segmentation_accuracy
 
@@ -61,7 +58,7 @@ class TrialAccumulation:
     smooth_bins: int
     labels: dict[str, Any]
     split: str
-    annotations: list[tuple[float, float, str]]
+    annotations: list[Annotation]
     true_labels: np.ndarray | None
     segmentation: Segmentation | None = None
     score: SegmentationScore | None = None
@@ -87,7 +84,7 @@ class TrialAccumulation:
         if self.score is not None:
             out["bin_accuracy"] = _finite(self.score.bin_accuracy)
             out["boundary_errors_s"] = dict(zip(
-                ("press", "slip", "release"),
+                ACTIONS[1:],  # boundary k starts action k
                 (_finite(float(e)) for e in self.score.boundary_errors_s), strict=True))
         return out
 
@@ -146,21 +143,37 @@ def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _select_trials(h5: h5py.File, path: Path, trials: Sequence[str] | None
-                   ) -> tuple[list[str], list[str]]:
-    """(trials to accumulate, trials skipped for having no events)."""
-    names = list(h5["trials"].keys())
+def _select_trials(tf: TactileFile, trials: Sequence[str] | None
+                   ) -> tuple[list[Trial], list[str]]:
+    """(trials to accumulate, names of the trials skipped for having no events)."""
     if trials:
-        missing = [t for t in trials if t not in h5["trials"]]
-        if missing:
-            raise unknown_trial(path, missing[0], names)
-        return list(dict.fromkeys(trials)), []
-    with_events = [n for n in names if "events" in h5["trials"][n]
-                   and h5["trials"][n]["events"]["t"].shape[0] > 0]
+        return tf.trials(trials), []
+    with_events = [t for t in tf.trials() if t.has_events and t.events.n_events > 0]
     if not with_events:
         raise InputError("no trial has events (event counts need an event-camera recording)",
-                         path=path)
-    return with_events, [n for n in names if n not in with_events]
+                         path=tf.path)
+    kept = {t.name for t in with_events}
+    return with_events, [n for n in tf.trial_names if n not in kept]
+
+
+def _accumulate_trial(trial: Trial, *, bin_s: float, smooth_bins: int, segment: bool
+                      ) -> TrialAccumulation:
+    """Counts, smoothing and (with ``segment``) the scored segmentation of one trial."""
+    counts = trial_counts(trial, bin_s=bin_s)
+    annotations = trial.annotations
+    truth = counts_to_labels(counts.t_s, annotations)
+    acc = TrialAccumulation(
+        trial=trial.name, sensor=trial.events.sensor_name if trial.has_events else "",
+        counts=counts, smoothed=moving_average(counts.net, smooth_bins),
+        smooth_bins=smooth_bins, labels=trial.labels, split=trial.split,
+        annotations=annotations, true_labels=truth if (truth >= 0).any() else None,
+    )
+    if segment:
+        acc.segmentation = segment_actions(counts.net, bin_s=bin_s, smooth_bins=smooth_bins)
+        if acc.true_labels is not None:
+            acc.score = segmentation_accuracy(acc.segmentation.labels, acc.true_labels,
+                                              bin_s=bin_s)
+    return acc
 
 
 def accumulate_file(
@@ -185,51 +198,27 @@ def accumulate_file(
         bin_us_of(bin_s)
     except ValueError:
         raise InputError(f"bin width {bin_s * 1e3:g} ms is not a whole number of "
-                         "microseconds; pass e.g. --bin-ms 20") from None
+                         "microseconds; pass e.g. `bin_s=0.02`") from None
     if smooth_bins < 1 or smooth_bins % 2 == 0:
         raise InputError(f"smoothing window {smooth_bins} bins must be odd and >= 1 (a "
-                         "centred moving average); pass e.g. --smooth 5")
+                         "centred moving average); pass e.g. `smooth_bins=5`")
     if not path.is_file():
         raise InputError("file not found", path=path)
-    with open_tactile(path) as h5:
-        names, skipped = _select_trials(h5, path, trials)
-        meta = {}
-        for name in names:
-            group = h5["trials"][name]
-            sensor = ""
-            if "events" in group:
-                sensor = attr_value(group["events"].attrs["sensor"])
-            meta[name] = (
-                sensor,
-                {k: attr_value(v) for k, v in group["labels"].attrs.items()},
-                attr_value(group.attrs.get("split", "")),
-            )
+    with TactileFile(path) as tf:
+        selected, skipped = _select_trials(tf, trials)
         sensors = {}
-        for sensor, _, _ in meta.values():
-            if sensor and sensor in h5["sensors"]:
-                attrs = h5["sensors"][sensor].attrs
+        for trial in selected:
+            sensor = trial.events.sensor_name if trial.has_events else ""
+            if sensor and sensor in tf.sensor_names:
+                attrs = tf.sensor(sensor).attrs
                 sensors[sensor] = (int(attrs["width_px"]), int(attrs["height_px"]))
-    run = FileAccumulation(path, float(bin_s), int(smooth_bins), segment, sensors=sensors,
-                           skipped=skipped)
-    progress.start(len(names), "accumulating trials")
-    for name in names:
-        sensor, labels, split = meta[name]
-        counts = trial_counts(path, name, bin_s=bin_s)
-        annotations = read_annotations(path, name)
-        truth = counts_to_labels(counts.t_s, annotations)
-        acc = TrialAccumulation(
-            trial=name, sensor=sensor, counts=counts,
-            smoothed=moving_average(counts.net, smooth_bins), smooth_bins=smooth_bins,
-            labels=labels, split=split,
-            annotations=annotations, true_labels=truth if (truth >= 0).any() else None,
-        )
-        if segment:
-            acc.segmentation = segment_actions(counts.net, bin_s=bin_s, smooth_bins=smooth_bins)
-            if acc.true_labels is not None:
-                acc.score = segmentation_accuracy(acc.segmentation.labels, acc.true_labels,
-                                                  bin_s=bin_s)
-        run.trials.append(acc)
-        progress.advance(1)
+        run = FileAccumulation(path, float(bin_s), int(smooth_bins), segment, sensors=sensors,
+                               skipped=skipped)
+        progress.start(len(selected), "accumulating trials")
+        for trial in selected:
+            run.trials.append(_accumulate_trial(trial, bin_s=bin_s, smooth_bins=smooth_bins,
+                                                segment=segment))
+            progress.advance(1)
     progress.finish()
     return run
 
@@ -318,7 +307,7 @@ def write_bins_csv(run: FileAccumulation, out: str | Path, *, overwrite: bool = 
     """Write :func:`bin_rows` to a CSV file (temporary file, then an atomic rename)."""
     out = Path(out)
     if out.exists() and not overwrite:
-        raise InputError("output exists; pass --overwrite to replace it", path=out)
+        raise InputError("output exists; pass `overwrite=True` to replace it", path=out)
     if not out.parent.is_dir():
         raise InputError("output folder does not exist", path=out.parent)
     rows = bin_rows(run)

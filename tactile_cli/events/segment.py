@@ -63,7 +63,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.signal import find_peaks
 
-from ..fos.actions import ACTIONS, BIN_S
+from ..vocabulary import ACTIONS, BIN_S
 from .accumulate import moving_average
 
 #: Segmentation status values.

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
+from ..store.trials import TactileFile
 from ..store.update import DerivedUpdate, check_derived_targets
 from .fit import FitOptions
 from .protocol import RegionFits, fit_regions
@@ -68,7 +69,8 @@ def fit_fos_file(
     targets = [("fits", GROUP_NAMES[r]) for r in regions if r in GROUP_NAMES]
     if write:
         check_derived_targets(path, targets, overwrite=overwrite)
-    trials = read_trial_regions(path, bin_s=bin_s, regions=region_source)
+    with TactileFile(path) as tf:  # read once, closed before the update copies the file
+        trials = read_trial_regions(tf, bin_s=bin_s, regions=region_source)
     widths = sorted({tr.bin_s for tr in trials})
     if len(widths) > 1:
         raise InputError(f"the trials' count streams have different bin widths "

@@ -87,7 +87,8 @@ class RegionFits:
         if status == PRESS_FAILED:
             return PRESS_FAILED_MESSAGE
         if status == NO_REGIONS:
-            return f"no press and slip regions ({detail}); annotate the trial (--annotations)"
+            return (f"no press and slip regions ({detail}); annotate the trial "
+                    "(`tactile ingest --annotations FILE`)")
         return FitStatus(status).message
 
     def curve(self, i: int, t_s: ArrayLike) -> np.ndarray:

@@ -26,12 +26,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..store.reader import attr_value, open_tactile
-from .actions import BIN_S
+from ..store.trials import TactileFile, Trial
+from ..vocabulary import BIN_S
 
 RegionsMode = Literal["annotations", "detect", "auto"]
 REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
@@ -102,62 +101,60 @@ def label_int(value: Any) -> int | None:
     return int(number) if np.isfinite(number) and number == int(number) else None
 
 
-def _stream_counts(h5: h5py.File, path: Path, trial: str, bin_s: float | None
+def _stream_counts(trial: Trial, bin_s: float | None
                    ) -> tuple[np.ndarray, np.ndarray, float]:
     """Bin centres, net counts and bin width of a trial's ``signals/event_counts``."""
-    where = f"/trials/{trial}/signals/{COUNTS_STREAM}"
-    stream = h5[where]
-    sensor = attr_value(stream.attrs.get("sensor", ""))
-    sensor_group = h5["sensors"].get(sensor) if sensor else None
-    if sensor_group is None or "channel_names" not in sensor_group:
-        raise InputError(f"the stream's sensor {sensor!r} has no channel_names; cannot find "
-                         "the net channel", path=path, where=where)
-    names = [str(n) for n in sensor_group["channel_names"].asstr()[()]]
-    data = stream["data"][()].astype(np.float64)
-    t_s = stream["t_s"][()].astype(np.float64)
+    where = f"{trial.where}/signals/{COUNTS_STREAM}"
+    sensor = trial.signal_sensor(COUNTS_STREAM)
+    if not sensor.channel_names:
+        raise InputError(f"the stream's sensor {sensor.name!r} has no channel_names; cannot "
+                         "find the net channel", path=trial.path, where=where)
+    names = list(sensor.channel_names)
     if "net" in names:
-        net = data[:, names.index("net")]
+        stream = trial.signal(COUNTS_STREAM, channels=["net"])
+        net = stream.data[:, 0].astype(np.float64)
     elif "positive" in names and "negative" in names:
-        net = data[:, names.index("positive")] - data[:, names.index("negative")]
+        stream = trial.signal(COUNTS_STREAM, channels=["positive", "negative"])
+        data = stream.data.astype(np.float64)
+        net = data[:, 0] - data[:, 1]
     else:
         raise InputError(f"channels {names} have neither 'net' nor 'positive' and 'negative'",
-                         path=path, where=where)
-    stored = stream.attrs.get("bin_s", sensor_group.attrs.get("bin_s"))
+                         path=trial.path, where=where)
+    t_s = stream.t_s
+    stored = stream.attrs.get("bin_s", sensor.attrs.get("bin_s"))
     if stored is None:
         if len(t_s) < 2:
             raise InputError("the stream has no bin_s attribute and fewer than 2 bins",
-                             path=path, where=where)
+                             path=trial.path, where=where)
         stored = float(np.median(np.diff(t_s)))
     stored = float(stored)
     if bin_s is not None and abs(stored - bin_s) > _BIN_RTOL * bin_s:
         raise InputError(f"the stream's bins are {stored * 1e3:g} ms, not the "
-                         f"{bin_s * 1e3:g} ms asked for; pass --bin-ms {stored * 1e3:g}",
-                         path=path, where=where)
+                         f"{bin_s * 1e3:g} ms asked for; pass `bin_s={stored:g}`",
+                         path=trial.path, where=where)
     return t_s, net, stored
 
 
-def _annotated_regions(h5: h5py.File, path: Path, trial: str
-                       ) -> dict[str, tuple[float, float]] | None:
+def _annotated_regions(trial: Trial) -> dict[str, tuple[float, float]] | None:
     """``{"press": (start, end), "slip": (start, end)}`` from the annotations, or None when
     the trial lacks either interval; an error when one is annotated more than once."""
-    group = h5["trials"][trial]
-    if "annotations" not in group:
+    annotations = trial.annotations
+    if not annotations:
         return None
-    ann = group["annotations"]
-    labels = [str(s).strip().lower() for s in ann["label"].asstr()[()]]
-    starts, ends = ann["start_s"][()], ann["end_s"][()]
+    where = f"{trial.where}/annotations"
+    labels = [a.label.strip().lower() for a in annotations]
     found: dict[str, tuple[float, float]] = {}
     for name in ("press", "slip"):
         idx = [i for i, lab in enumerate(labels) if lab == name]
         if len(idx) > 1:
             raise InputError(f"{len(idx)} intervals are labelled {name!r}; fit-fos fits one "
                              "press and one slip per trial (split the trial, or pass "
-                             "--regions detect)", path=path, where=f"/trials/{trial}/annotations")
+                             "`regions='detect'`)", path=trial.path, where=where)
         if idx:
-            start, end = float(starts[idx[0]]), float(ends[idx[0]])
+            start, end = annotations[idx[0]].start_s, annotations[idx[0]].end_s
             if not (np.isfinite(start) and np.isfinite(end) and end > start):
                 raise InputError(f"the {name!r} interval [{start}, {end}) s is empty or not "
-                                 "finite", path=path, where=f"/trials/{trial}/annotations")
+                                 "finite", path=trial.path, where=where)
             found[name] = (start, end)
     return found if len(found) == 2 else None
 
@@ -175,7 +172,7 @@ def _detected_regions(net: np.ndarray, bin_s: float
 
 
 def read_trial_regions(
-    path: str | Path,
+    source: str | Path | TactileFile,
     *,
     bin_s: float | None = None,
     regions: RegionsMode = "auto",
@@ -185,8 +182,10 @@ def read_trial_regions(
 
     Parameters
     ----------
-    path:
-        A tactile HDF5 file whose trials have events or a ``signals/event_counts`` stream.
+    source:
+        A tactile HDF5 file (a path, opened here once, or an open
+        :class:`~tactile_cli.store.trials.TactileFile`) whose trials have events or a
+        ``signals/event_counts`` stream.
     bin_s:
         Bin width in seconds. None: 20 ms for events, the stream's own width for count
         streams; a count stream of another width is an error (streams are not re-binned).
@@ -198,57 +197,59 @@ def read_trial_regions(
     Raises :class:`InputError` for a trial with neither events nor counts, a trial without
     press/slip annotations under ``regions="annotations"``, or a file without trials.
     """
-    path = Path(path)
     if regions not in REGION_MODES:
         raise ValueError(f"`regions` (={regions!r}) must be one of {REGION_MODES}.")
     if bin_s is not None and not (np.isfinite(bin_s) and bin_s > 0):
         raise ValueError(f"`bin_s` (={bin_s}) must be a positive number of seconds.")
-    with open_tactile(path) as h5:
-        names = list(h5["trials"].keys())
-        if trials is not None:
-            missing = [t for t in trials if t not in h5["trials"]]
-            if missing:
-                raise InputError(f"no trial {missing[0]!r} in the file", path=path)
-            names = list(trials)
-        if not names:
-            raise InputError("the file has no trials", path=path)
-        plan = []
-        for name in names:
-            group = h5["trials"][name]
-            labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()}
-            ann = _annotated_regions(h5, path, name) if regions != "detect" else None
-            if regions == "annotations" and ann is None:
-                raise InputError("no 'press' and 'slip' annotations; add them at ingest "
-                                 "(--annotations) or pass --regions detect",
-                                 path=path, where=f"/trials/{name}")
-            if "events" in group:
-                plan.append((name, labels, ann, None))
-            elif f"signals/{COUNTS_STREAM}" in group:
-                plan.append((name, labels, ann, _stream_counts(h5, path, name, bin_s)))
-            else:
-                raise InputError("the trial has neither events nor a "
-                                 f"signals/{COUNTS_STREAM} stream; fit-fos needs event counts",
-                                 path=path, where=f"/trials/{name}")
+    if not isinstance(source, TactileFile):
+        with TactileFile(source) as tf:
+            return read_trial_regions(tf, bin_s=bin_s, regions=regions, trials=trials)
+    tf, path = source, source.path
+    names = tf.trial_names
+    if trials is not None:
+        missing = [t for t in trials if t not in tf.trial_names]
+        if missing:
+            raise InputError(f"no trial {missing[0]!r} in the file", path=path)
+        names = list(trials)
+    if not names:
+        raise InputError("the file has no trials", path=path)
+    # every trial is checked (annotations, counts present) before any events are counted
+    plan = []
+    for name in names:
+        trial = tf.trial(name)
+        ann = _annotated_regions(trial) if regions != "detect" else None
+        if regions == "annotations" and ann is None:
+            raise InputError("no 'press' and 'slip' annotations; add them at ingest "
+                             "(`tactile ingest --annotations FILE`) or pass `regions='detect'`",
+                             path=path, where=trial.where)
+        if trial.has_events:
+            plan.append((trial, ann, None))
+        elif trial.has_signal(COUNTS_STREAM):
+            plan.append((trial, ann, _stream_counts(trial, bin_s)))
+        else:
+            raise InputError("the trial has neither events nor a "
+                             f"signals/{COUNTS_STREAM} stream; fit-fos needs event counts",
+                             path=path, where=trial.where)
 
     out = []
-    for name, labels, ann, stream in plan:
+    for trial, ann, stream in plan:
         if stream is None:
             from ..events.accumulate import trial_counts
 
             try:
-                counts = trial_counts(path, name, bin_s=BIN_S if bin_s is None else bin_s)
+                counts = trial_counts(trial, bin_s=BIN_S if bin_s is None else bin_s)
             except ValueError:  # a bin width that is not whole microseconds
                 raise InputError(f"a bin width of {bin_s * 1e3:g} ms is not a whole number of "
-                                 "microseconds; pass another --bin-ms", path=path) from None
+                                 "microseconds; pass another `bin_s`", path=path) from None
             t_s, net, width = counts.t_s, counts.net.astype(np.float64), counts.bin_s
             counts_from = "events"
         else:
             (t_s, net, width), counts_from = stream, f"signals/{COUNTS_STREAM}"
         found, note = (ann, "") if ann is not None else _detected_regions(net, width)
         out.append(TrialRegions(
-            trial=name, t_s=t_s, net=net, bin_s=float(width), press_s=found["press"],
+            trial=trial.name, t_s=t_s, net=net, bin_s=float(width), press_s=found["press"],
             slip_s=found["slip"], regions_from="annotations" if ann is not None else "detected",
-            counts_from=counts_from, labels=labels, regions_note=note))
+            counts_from=counts_from, labels=trial.labels, regions_note=note))
     return out
 
 

@@ -21,13 +21,14 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..store.reader import open_tactile
+from ..store.trials import TactileFile
+from ..store.update import write_columns
 
 if TYPE_CHECKING:  # the fitting code (and jax) is not needed to read a fits group
+    from ..store.update import DerivedGroup
     from .protocol import RegionFits
 
 #: Columns of a fits group, in order.
@@ -45,7 +46,6 @@ UNITS = {
 }
 #: Group names of the two regions under /derived/fits.
 GROUP_NAMES = {"press": "fos_press", "slip": "fos_slip"}
-_STR = h5py.string_dtype("utf-8")
 
 
 def fit_columns(rf: RegionFits) -> dict[str, np.ndarray]:
@@ -111,40 +111,41 @@ def write_csv(path: str | Path, records: Sequence[Mapping[str, Any]]) -> Path:
     return path
 
 
-def write_fit_group(group: h5py.Group, rf: RegionFits, *, bin_s: float | None) -> None:
-    """Write one region's fits into ``group`` (an empty group of a writable file)."""
-    for key, values in fit_columns(rf).items():
-        if key in STRING_COLUMNS:
-            group.create_dataset(key, data=np.asarray(values, dtype=object), dtype=_STR)
-        else:
-            group.create_dataset(key, data=values)
-    group.attrs["region"] = rf.region
-    group.attrs["model"] = rf.model
-    group.attrs["duration_fitted"] = bool(rf.fit.duration_fitted)
-    group.attrs["criterion"] = "bic"
-    group.attrs["units_json"] = json.dumps(UNITS, sort_keys=True)
+def write_fit_group(group: DerivedGroup, rf: RegionFits, *, bin_s: float | None) -> None:
+    """Write one region's fits into ``group`` (an empty group of a writable file, from
+    :meth:`tactile_cli.store.update.DerivedUpdate.group`)."""
+    attrs: dict[str, Any] = {
+        "region": rf.region,
+        "model": rf.model,
+        "duration_fitted": bool(rf.fit.duration_fitted),
+        "criterion": "bic",
+        "units_json": json.dumps(UNITS, sort_keys=True),
+    }
     if bin_s is not None:
-        group.attrs["bin_s"] = float(bin_s)
+        attrs["bin_s"] = float(bin_s)
+    write_columns(group, fit_columns(rf), strings=STRING_COLUMNS, attrs=attrs)
 
 
-def read_fit_group(path: str | Path, name: str) -> dict[str, np.ndarray]:
-    """The columns of ``/derived/fits/{name}`` of a tactile file (strings decoded).
+def read_fit_group(source: str | Path | TactileFile, name: str) -> dict[str, np.ndarray]:
+    """The columns of ``/derived/fits/{name}`` of a tactile file (a path, or an open
+    :class:`~tactile_cli.store.trials.TactileFile`), strings decoded.
 
     Raises :class:`InputError` naming the file and the HDF5 path when the group or one of
     its columns is missing, with the command that writes it.
     """
-    path = Path(path)
-    where = f"/derived/fits/{name}"
-    with open_tactile(path) as h5:
-        if where not in h5:
-            raise InputError(f"no {where}; write it with `tactile fit-fos {path}`", path=path)
-        group = h5[where]
-        missing = [c for c in COLUMNS if c not in group]
-        if missing:
-            raise InputError(f"column {missing[0]!r} is missing; re-run `tactile fit-fos "
-                             f"{path} --overwrite`", path=path, where=where)
-        return {c: (group[c].asstr()[()] if c in STRING_COLUMNS else group[c][()])
-                for c in COLUMNS}
+    if not isinstance(source, TactileFile):
+        with TactileFile(source) as tf:
+            return read_fit_group(tf, name)
+    path = source.path
+    if not source.has_derived("fits", name):
+        raise InputError(f"no /derived/fits/{name}; write it with `tactile fit-fos {path}`",
+                         path=path)
+    group = source.derived("fits", name, strings=STRING_COLUMNS)
+    missing = [c for c in COLUMNS if c not in group.columns]
+    if missing:
+        raise InputError(f"column {missing[0]!r} is missing; re-run `tactile fit-fos "
+                         f"{path} --overwrite`", path=path, where=group.where)
+    return {c: group.columns[c] for c in COLUMNS}
 
 
 __all__ = ["COLUMNS", "GROUP_NAMES", "UNITS", "fit_columns", "fit_records", "read_fit_group",

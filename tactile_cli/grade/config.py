@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
+from ..vocabulary import BIN_S
 from .fuzzy import MF_KINDS, MamdaniSystem, MembershipFunction
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -105,7 +106,7 @@ class FeatureConfig(_Strict):
     press duration varies (the area is proportional to alpha_1 times the duration)."""
 
     kind: Literal["area", "fos_alpha"] = "area"
-    bin_s: float = 0.02
+    bin_s: float = BIN_S
     region: str = "press"
 
     @field_validator("bin_s")

@@ -31,12 +31,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..store.reader import attr_value, open_tactile
-from ..store.validate import check_readable
+from ..store.trials import TactileFile, Trial, is_hdf5
+from ..vocabulary import BIN_S
 
 #: Trial labels the grader reads as the truth.
 LABEL_KEYS = ("force_grade", "force_level")
@@ -71,7 +70,7 @@ def press_area(net: np.ndarray, t_s: np.ndarray, start_s: float, end_s: float) -
     return float(np.asarray(net, dtype=np.float64)[inside].sum())
 
 
-def load_areas(paths: list[Path], *, bin_s: float = 0.02, region: str = "press",
+def load_areas(paths: list[Path], *, bin_s: float = BIN_S, region: str = "press",
                kind: str = "area") -> list[TrialArea]:
     """Grader inputs of every trial of every file: tactile HDF5 files and ``.csv`` tables.
     ``kind`` ``area`` (the default) or ``fos_alpha`` (see the module docstring)."""
@@ -84,9 +83,9 @@ def load_areas(paths: list[Path], *, bin_s: float = 0.02, region: str = "press",
             raise InputError("file not found", path=path)
         if path.suffix.lower() == ".csv":
             out.extend(read_area_csv(path))
-        elif h5py.is_hdf5(path) and kind == "fos_alpha":
+        elif is_hdf5(path) and kind == "fos_alpha":
             out.extend(fos_alphas(path))
-        elif h5py.is_hdf5(path):
+        elif is_hdf5(path):
             out.extend(hdf5_areas(path, bin_s=bin_s, region=region))
         else:
             raise InputError("neither a tactile HDF5 file nor a .csv table of areas "
@@ -152,32 +151,17 @@ def read_area_csv(path: str | Path) -> list[TrialArea]:
 
 
 # -- HDF5 ------------------------------------------------------------------------------------
-def hdf5_areas(path: str | Path, *, bin_s: float = 0.02, region: str = "press") \
+def hdf5_areas(path: str | Path, *, bin_s: float = BIN_S, region: str = "press") \
         -> list[TrialArea]:
-    """Areas of every trial of one tactile HDF5 file (see the module docstring)."""
-    path = Path(path)
-    h5 = open_tactile(path)
-    plan = []
-    with h5:
-        if "trials" not in h5:
-            raise InputError("no /trials group; not a tactile file", path=path)
-        for name, group in h5["trials"].items():
-            labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()
-                      if k in LABEL_KEYS} if "labels" in group else {}
-            annotations = _annotations(group, region)
-            stream = None if "events" in group else _net_stream(h5, group)
-            plan.append((name, labels, annotations, "events" in group, stream))
-    out = []
-    for name, labels, annotations, has_events, stream in plan:
-        out.append(_trial_area(path, name, labels, annotations, has_events, stream,
-                               bin_s=bin_s, region=region))
-    return out
+    """Areas of every trial of one tactile HDF5 file (see the module docstring), the file
+    opened once."""
+    with TactileFile(path) as f:
+        return [trial_area(trial, bin_s=bin_s, region=region) for trial in f]
 
 
-def _trial_labels(path: Path) -> dict[str, dict[str, Any]]:
-    with h5py.File(path, "r") as h5:
-        return {name: {k: attr_value(v) for k, v in g["labels"].attrs.items() if k in LABEL_KEYS}
-                if "labels" in g else {} for name, g in h5["trials"].items()}
+def _grade_labels(trial: Trial) -> dict[str, Any]:
+    """The trial's ``force_grade``/``force_level`` labels (those it has)."""
+    return {k: v for k, v in trial.labels.items() if k in LABEL_KEYS}
 
 
 def fos_alphas(path: str | Path) -> list[TrialArea]:
@@ -185,12 +169,11 @@ def fos_alphas(path: str | Path) -> list[TrialArea]:
     from ..fos.table import read_fit_group
 
     path = Path(path)
-    try:
-        check_readable(path)
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=path) from None
-    cols = read_fit_group(path, "fos_press")
-    labels = _trial_labels(path)
+    with TactileFile(path) as f:
+        cols = read_fit_group(path, "fos_press")
+        labels = {name: _grade_labels(f.trial(name))
+                  for name in dict.fromkeys(str(t) for t in cols["trial"])
+                  if name in f.trial_names}
     out = []
     for k, trial in enumerate(cols["trial"]):
         ok = str(cols["status"][k]) == "converged" and np.isfinite(cols["alpha"][k])
@@ -202,67 +185,52 @@ def fos_alphas(path: str | Path) -> list[TrialArea]:
     return out
 
 
-def _annotations(group: h5py.Group, region: str) -> list[tuple[float, float]]:
-    if "annotations" not in group:
-        return []
-    ann = group["annotations"]
-    labels = ann["label"].asstr()[()]
-    starts, ends = ann["start_s"][()], ann["end_s"][()]
-    want = region.strip().lower()
-    return [(float(s), float(e)) for s, e, lab in zip(starts, ends, labels, strict=True)
-            if str(lab).strip().lower() == want]
-
-
-def _net_stream(h5: h5py.File, group: h5py.Group) -> dict[str, Any] | None:
+def _net_stream(trial: Trial) -> dict[str, Any] | None:
     """net counts, bin centres, per-sample action labels of a stream with a ``net`` channel
     (``event_counts`` first), or None."""
-    if "signals" not in group:
-        return None
-    names = sorted(group["signals"], key=lambda s: s != "event_counts")
-    for stream_name in names:
-        s = group["signals"][stream_name]
-        sensor = h5["sensors"].get(attr_value(s.attrs.get("sensor", "")))
-        if sensor is None or "channel_names" not in sensor:
+    for stream_name in sorted(trial.signal_names, key=lambda s: s != "event_counts"):
+        try:
+            sensor = trial.signal_sensor(stream_name)
+        except InputError:  # no sensor, or one the file does not describe: not a count stream
             continue
-        channels = [str(c) for c in sensor["channel_names"].asstr()[()]]
-        if "net" not in channels:
+        if "net" not in sensor.channel_names:
             continue
-        out: dict[str, Any] = {
+        signal = trial.signal(stream_name, channels=["net"])
+        action = signal.sample_labels.get("action")
+        return {
             "stream": stream_name,
-            "net": s["data"][:, channels.index("net")].astype(np.float64),
-            "t_s": s["t_s"][()],
-            "action": None,
+            "net": signal.data[:, 0].astype(np.float64),
+            "t_s": signal.t_s,
+            "action": None if action is None else (action.values, list(action.classes or ())),
         }
-        if "sample_labels" in s and "action" in s["sample_labels"]:
-            ds = s["sample_labels"]["action"]
-            classes = [str(attr_value(c)) for c in ds.attrs.get("classes", [])]
-            out["action"] = (ds[()], classes)
-        return out
     return None
 
 
-def _trial_area(path: Path, trial: str, labels: dict[str, Any],
-                annotations: list[tuple[float, float]], has_events: bool,
-                stream: dict[str, Any] | None, *, bin_s: float, region: str) -> TrialArea:
-    if has_events:
+def trial_area(trial: Trial, *, bin_s: float = BIN_S, region: str = "press") -> TrialArea:
+    """The grader input of one trial of an open tactile file (see the module docstring):
+    NaN with a ``status`` saying why when its press region cannot be found."""
+    file, name = str(trial.path), trial.name
+    labels = _grade_labels(trial)
+    annotation = trial.annotation(region)
+    if trial.has_events:
         from ..events import trial_counts  # lazy: the grader also runs on CSV areas
 
-        counts = trial_counts(path, trial, bin_s=bin_s)
+        counts = trial_counts(trial, bin_s=bin_s)
         net, t_s, step_s = counts.net, counts.t_s, counts.bin_s
         action = None
-    elif stream is not None:
+    elif (stream := _net_stream(trial)) is not None:
         net, t_s, action = stream["net"], stream["t_s"], stream["action"]
         step_s = float(np.median(np.diff(t_s))) if t_s.shape[0] > 1 else bin_s
     else:
-        return TrialArea(str(path), trial, float("nan"), labels=labels,
+        return TrialArea(file, name, float("nan"), labels=labels,
                          status="no events and no stream with a `net` channel")
-    if annotations:
-        start, end = annotations[0]
+    if annotation is not None:
+        start, end = annotation.start_s, annotation.end_s
         source = "annotations"
     elif action is not None and region in action[1]:
         idx = np.flatnonzero(action[0] == action[1].index(region))
         if idx.size == 0:
-            return TrialArea(str(path), trial, float("nan"), labels=labels,
+            return TrialArea(file, name, float("nan"), labels=labels,
                              status=f"no sample labelled {region!r}")
         start, end = t_s[idx[0]] - 0.5 * step_s, t_s[idx[-1]] + 0.5 * step_s
         source = "sample_labels"
@@ -270,17 +238,17 @@ def _trial_area(path: Path, trial: str, labels: dict[str, Any],
         from ..events import segment_actions
 
         seg = segment_actions(np.asarray(net, dtype=np.float64), bin_s=step_s)
-        if not seg.ok:
-            return TrialArea(str(path), trial, float("nan"), labels=labels,
+        if not seg.segmented:
+            return TrialArea(file, name, float("nan"), labels=labels,
                              status=f"segmentation failed: {seg.message}")
         start, end = seg.press_start_s, seg.slip_start_s
         source = "segmentation"
     else:
-        return TrialArea(str(path), trial, float("nan"), labels=labels,
+        return TrialArea(file, name, float("nan"), labels=labels,
                          status=f"no annotation or sample label {region!r}")
-    return TrialArea(str(path), trial, press_area(net, t_s, start, end), float(start),
+    return TrialArea(file, name, press_area(net, t_s, start, end), float(start),
                      float(end), source, labels)
 
 
 __all__ = ["LABEL_KEYS", "TrialArea", "fos_alphas", "hdf5_areas", "load_areas", "press_area",
-           "read_area_csv"]
+           "read_area_csv", "trial_area"]

@@ -141,7 +141,7 @@ def grade_trials(areas: list[TrialArea], config: GraderConfig, *,
                  label_key: str | None = None) -> GradeReport:
     """Grade every trial in one vectorised call and score the labelled ones."""
     if label_key not in (None, "force_grade", "force_level"):
-        raise InputError(f"--label-key {label_key!r} must be force_grade or force_level")
+        raise InputError(f"`label_key` (={label_key!r}) must be force_grade or force_level")
     grader = FuzzyGrader(config)
     x = np.array([t.area for t in areas], dtype=np.float64)
     inf = grader.grade(x)

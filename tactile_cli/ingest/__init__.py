@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter, safe_name
+from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter
 
 #: format name -> "module:function" (imported on use, so the CLI starts fast)
 FORMATS: dict[str, str] = {
@@ -73,8 +73,8 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
                 kinds.add("images")
             else:
                 raise InputError(
-                    "cannot tell the format of a folder; pass --format accel-tree, "
-                    "--format images, or --mapping FILE.yaml",
+                    "cannot tell the format of a folder; pass `format='accel-tree'`, "
+                    "`format='images'`, or `mapping='FILE.yaml'`",
                     path=path,
                 )
         elif path.suffix.lower() == ".aedat4":
@@ -86,7 +86,7 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
         else:
             raise InputError(
                 f"unknown format (suffix {path.suffix or 'none'!r}); supported: .aedat4, "
-                ".npy, .csv events, folders with --format or --mapping",
+                ".npy, .csv events, folders with `format` or `mapping`",
                 path=path,
             )
     if len(kinds) != 1:
@@ -138,14 +138,12 @@ def ingest(
         module_name, func_name = FORMATS[fmt].split(":")
         reader = getattr(importlib.import_module(module_name), func_name)
         reader(paths, writer, options, progress)
-        trials = writer.h5["trials"]
-        if len(trials) == 0:
+        if not writer.trial_names:
             raise InputError("no trials found in the inputs", path=paths[0])
         if options.labels:
-            for group in trials.values():
-                for key, value in options.labels.items():
-                    group["labels"].attrs[safe_name(key)] = value
-        apply_sidecars(trials, annotations=annotations, labels=trial_labels)
+            for name in writer.trial_names:
+                writer.trial_writer(name).set_labels(**options.labels)
+        apply_sidecars(writer, annotations=annotations, labels=trial_labels)
         for sidecar in (options.annotations, options.trial_labels):
             if sidecar is not None:
                 writer.add_source(sidecar)
@@ -158,7 +156,7 @@ def parse_labels(pairs: Sequence[str]) -> dict[str, str | int | float]:
     for pair in pairs:
         key, sep, value = pair.partition("=")
         if not sep or not key.strip():
-            raise InputError(f"--label {pair!r} must look like key=value")
+            raise InputError(f"`labels` {pair!r} must look like key=value")
         out[key.strip()] = _number_or_text(value.strip())
     return out
 

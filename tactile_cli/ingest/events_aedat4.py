@@ -95,8 +95,8 @@ def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
         raise InputError(f"event stream {stream.stream_id} does not state its sensor size",
                          path=path)
     width, height = int(stream.width_px), int(stream.height_px)
-    for flag, given, found in (("--width", options.width_px, width),
-                               ("--height", options.height_px, height)):
+    for flag, given, found in (("`width_px`", options.width_px, width),
+                               ("`height_px`", options.height_px, height)):
         if given is not None and given != found:
             raise InputError(f"{flag} {given} disagrees with the file's sensor size "
                              f"{width}x{height} px; omit {flag} for AEDAT4 files", path=path)

@@ -109,9 +109,9 @@ def link_source(trial: TrialWriter, hashing: Future[int]) -> None:
 def sensor_size(options: IngestOptions, what: str, path: Path | None = None) -> tuple[int, int]:
     """(width, height) in px from ``--width``/``--height``, which ``what`` files lack."""
     if options.width_px is None or options.height_px is None:
-        raise InputError(f"{what} files do not record the sensor size; pass --width and --height "
-                         "(pixels), e.g. --width 320 --height 240", path=path)
-    for flag, value in (("--width", options.width_px), ("--height", options.height_px)):
+        raise InputError(f"{what} files do not record the sensor size; pass `width_px` and "
+                         "`height_px` (pixels), e.g. `width_px=320` `height_px=240`", path=path)
+    for flag, value in (("`width_px`", options.width_px), ("`height_px`", options.height_px)):
         if value < 1 or value > 65536:
             raise InputError(f"{flag} (={value}) must be between 1 and 65536 px")
     return int(options.width_px), int(options.height_px)

@@ -316,8 +316,8 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
     first_ref = folders[0].reference
     reference0 = load_rgb(first_ref)
     size_hw = (int(reference0.shape[0]), int(reference0.shape[1]))
-    for option, value, actual in (("--width", options.width_px, size_hw[1]),
-                                  ("--height", options.height_px, size_hw[0])):
+    for option, value, actual in (("`width_px`", options.width_px, size_hw[1]),
+                                  ("`height_px`", options.height_px, size_hw[0])):
         if value is not None and value != actual:
             raise InputError(f"{option} is {value} px but the frames are "
                              f"{size_hw[1]}x{size_hw[0]} px (width x height); drop {option} or "

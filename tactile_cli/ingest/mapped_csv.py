@@ -412,7 +412,7 @@ def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
     sensor in ``/sensors``. Every file read is recorded as a source.
     """
     if options.mapping is None:
-        raise InputError("the mapped-csv format needs a mapping file: pass --mapping FILE.yaml "
+        raise InputError("the mapped-csv format needs a mapping file: pass `mapping='FILE.yaml'` "
                          "(see configs/mapping_example.yaml)")
     mapping_path = Path(options.mapping)
     mapping = load_mapping(mapping_path)

@@ -28,16 +28,12 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import h5py
-import numpy as np
-
 from ..errors import InputError
-from ..store.writer import safe_name
+from ..store.writer import StoreWriter, safe_name
 
 ANNOTATION_COLUMNS = ("trial", "start_s", "end_s", "label")
 _INT = re.compile(r"[+-]?\d+")
 _FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
-_STR = h5py.string_dtype("utf-8")
 
 
 @dataclass(frozen=True)
@@ -188,14 +184,15 @@ def _trial(path: Path, line: int, name: str) -> str:
     return safe_name(name)
 
 
-def apply_sidecars(trials: h5py.Group, *, annotations: Annotations | None = None,
+def apply_sidecars(writer: StoreWriter, *, annotations: Annotations | None = None,
                    labels: TrialLabels | None = None) -> None:
-    """Write parsed sidecars into the ``/trials`` group of a file being written.
+    """Write parsed sidecars into the trials of a file being written (through
+    :meth:`StoreWriter.trial_writer <tactile_cli.store.writer.StoreWriter.trial_writer>`).
 
-    Raises InputError naming the file and line of a row whose trial is not in ``trials``,
-    of a trial that already has annotations, or of a label that contradicts one already set.
+    Raises InputError naming the file and line of a row whose trial is not in the file, of
+    a trial that already has annotations, or of a label that contradicts one already set.
     """
-    have = set(trials.keys())
+    have = set(writer.trial_names)
 
     def unknown(path: Path, trial: str, line: int) -> InputError:
         shown = ", ".join(sorted(have)[:8]) + (" ..." if len(have) > 8 else "")
@@ -207,31 +204,25 @@ def apply_sidecars(trials: h5py.Group, *, annotations: Annotations | None = None
         for trial, rows in annotations.rows.items():
             if trial not in have:
                 raise unknown(annotations.path, trial, rows[0][3])
-            group = trials[trial]
-            if "annotations" in group:
+            trial_writer = writer.trial_writer(trial)
+            if trial_writer.has_annotations:
                 raise InputError(f"trial {trial!r} already has annotations from its input; "
-                                 "leave out --annotations", path=annotations.path,
+                                 "leave out `annotations`", path=annotations.path,
                                  where=f"line {rows[0][3]}")
-            ann = group.create_group("annotations")
-            ann.create_dataset("start_s", data=np.array([r[0] for r in rows], dtype=np.float64))
-            ann.create_dataset("end_s", data=np.array([r[1] for r in rows], dtype=np.float64))
-            ann.create_dataset("label", data=np.array([r[2] for r in rows], dtype=object),
-                               dtype=_STR)
+            trial_writer.set_annotations([(r[0], r[1], r[2]) for r in rows])
     if labels is not None:
         for trial, (values, line) in labels.rows.items():
             if trial not in have:
                 raise unknown(labels.path, trial, line)
-            attrs = trials[trial]["labels"].attrs
+            trial_writer = writer.trial_writer(trial)
+            old_labels = trial_writer.labels
             for key, value in values.items():
-                if key in attrs:
-                    old = attrs[key]
-                    old = old.decode() if isinstance(old, bytes) else (
-                        old.item() if isinstance(old, np.generic) else old)
-                    if old != value:
-                        raise InputError(f"label {key!r} = {value!r} contradicts {old!r} set "
-                                         "by the input or --label", path=labels.path,
-                                         where=f"line {line}")
-                attrs[key] = value
+                old = old_labels.get(key, value)
+                if old != value:
+                    raise InputError(f"label {key!r} = {value!r} contradicts {old!r} set "
+                                     "by the input or `labels`", path=labels.path,
+                                     where=f"line {line}")
+            trial_writer.set_labels(**values)
 
 
 __all__ = ["Annotations", "TrialLabels", "read_annotations", "read_trial_labels",

@@ -19,15 +19,15 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..errors import InputError  # noqa: E402
 from ..store.reader import summarize  # noqa: E402
-from ..store.validate import check_readable  # noqa: E402
+from ..store.trials import Frames, Signal, TactileFile, Trial, TrialEvents  # noqa: E402
 
 BIN_US = 20_000
 MAX_CHANNELS_DRAWN = 8
@@ -55,9 +55,14 @@ def event_counts(
     return np.arange(n_bins) * bin_us * 1e-6, on, off
 
 
-def _events_figure(g: h5py.Group, width: int, height: int, title: str, out: Path) -> None:
-    t, p = g["t"][()], g["p"][()]
-    x, y = g["x"][()], g["y"][()]
+def _events_figure(events: TrialEvents, title: str, out: Path) -> None:
+    sensor = events.sensor
+    if sensor.width_px is None or sensor.height_px is None:
+        raise InputError("an event camera needs width_px and height_px", path=events.path,
+                         where=f"/sensors/{sensor.name}")
+    width, height = sensor.width_px, sensor.height_px
+    ev = events.all()
+    t, p, x, y = ev.t_us, ev.p, ev.x, ev.y
     start, on, off = event_counts(t, p)
     frame = np.zeros((height, width), dtype=np.int64)
     np.add.at(frame, (y, x), p.astype(np.int64))
@@ -111,30 +116,26 @@ def _baseline_dominates(data: np.ndarray) -> tuple[bool, np.ndarray]:
     return spread > 5 * max(variation, 1e-12), offsets
 
 
-def _varying_label(s: h5py.Group) -> tuple[str, np.ndarray, list[str]] | None:
+def _varying_label(s: Signal) -> tuple[str, np.ndarray, list[str]] | None:
     """The categorical per-sample label with the most changes of class (None if all constant)."""
-    if "sample_labels" not in s:
-        return None
     best, best_changes = None, 0
-    for lname, ds in s["sample_labels"].items():
-        if "classes" not in ds.attrs:
+    for lname, label in s.sample_labels.items():
+        if label.classes is None:
             continue
-        values = ds[()]
-        changes = int(np.count_nonzero(np.diff(values)))
+        changes = int(np.count_nonzero(np.diff(label.values)))
         if changes > best_changes:
-            classes = [c.decode() if isinstance(c, bytes) else str(c) for c in ds.attrs["classes"]]
-            best, best_changes = (lname, values, classes), changes
+            best, best_changes = (lname, label.values, list(label.classes)), changes
     return best
 
 
-def _signals_figure(h5: h5py.File, g: h5py.Group, title: str, out: Path) -> None:
-    streams = list(g.items())
+def _signals_figure(trial: Trial, title: str, out: Path) -> None:
+    streams = trial.signal_names
     fig, axes = plt.subplots(len(streams), 1, figsize=(12, 2.6 * len(streams)), squeeze=False)
-    for ax, (name, s) in zip(axes[:, 0], streams, strict=True):
-        data, t = s["data"][()], s["t_s"][()]
-        sensor = h5["sensors"][s.attrs["sensor"]]
-        channels = sensor["channel_names"].asstr()[()] if "channel_names" in sensor else []
-        units = sensor["channel_units"].asstr()[()] if "channel_units" in sensor else []
+    for ax, name in zip(axes[:, 0], streams, strict=True):
+        s = trial.signal(name)  # one stream in memory at a time
+        data, t = s.data, s.t_s
+        # the sensor's own names and units: none drawn as the column number, as before
+        channels, units = s.sensor.channel_names, s.sensor.channel_units
         delta, offsets = _baseline_dominates(data)
         if delta:
             data = data - offsets
@@ -167,13 +168,12 @@ def _signals_figure(h5: h5py.File, g: h5py.Group, title: str, out: Path) -> None
     plt.close(fig)
 
 
-def _frames_figure(g: h5py.Group, title: str, out: Path) -> None:
-    images, ref = g["images"], g["reference"][()]
-    diffs = np.array(
-        [np.abs(images[i].astype(np.int16) - ref).mean() for i in range(images.shape[0])]
-    )
+def _frames_figure(frames: Frames, title: str, out: Path) -> None:
+    ref = frames.reference
+    # frames are read one at a time: a long sequence never sits in memory
+    diffs = np.array([np.abs(image.astype(np.int16) - ref).mean() for _, image in frames])
     k = int(np.argmax(diffs)) if diffs.size else 0
-    frame = images[k] if images.shape[0] else ref
+    frame = frames[k] if frames.n_frames else ref
     diff = np.abs(frame.astype(np.int16) - ref).sum(axis=2)
     fig, axes = plt.subplots(1, 4, figsize=(14, 3.4), gridspec_kw={"width_ratios": [1, 1, 1, 1.3]})
     axes[0].imshow(ref)
@@ -184,7 +184,7 @@ def _frames_figure(g: h5py.Group, title: str, out: Path) -> None:
     axes[2].set_title("|frame - reference|", fontsize=9)
     for a in axes[:3]:
         a.axis("off")
-    axes[3].plot(g["t_s"][()], diffs)
+    axes[3].plot(frames.t_s, diffs)
     axes[3].set_xlabel("time (s)")
     axes[3].set_ylabel("mean |frame - ref|")
     fig.suptitle(title, fontsize=10)
@@ -196,33 +196,25 @@ def _frames_figure(g: h5py.Group, title: str, out: Path) -> None:
 def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> list[Figure]:
     """Write quick-look PNGs of the first ``max_trials`` trials of a file into ``out_dir``."""
     path = Path(path)
-    check_readable(path)
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     figures: list[Figure] = []
-    with h5py.File(path, "r") as h5:
-        for name in list(h5["trials"])[:max_trials]:
-            g = h5["trials"][name]
-            labels = ", ".join(f"{k}={v}" for k, v in g["labels"].attrs.items())
+    with TactileFile(path) as tf:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        for name in tf.trial_names[:max_trials]:
+            trial = tf.trial(name)
+            labels = ", ".join(f"{k}={v}" for k, v in trial.labels.items())
             title = f"{path.name} / {name}" + (f" ({labels})" if labels else "")
-            if "events" in g:
-                sensor = h5["sensors"][g["events"].attrs["sensor"]]
+            if trial.has_events:
                 f = out_dir / f"{path.stem}__{name}__events.png"
-                _events_figure(
-                    g["events"],
-                    int(sensor.attrs["width_px"]),
-                    int(sensor.attrs["height_px"]),
-                    title,
-                    f,
-                )
+                _events_figure(trial.events, title, f)
                 figures.append(Figure(f, f"{title}: events per 20 ms and net polarity per pixel"))
-            if "signals" in g:
+            if trial.signal_names:
                 f = out_dir / f"{path.stem}__{name}__signals.png"
-                _signals_figure(h5, g["signals"], title, f)
+                _signals_figure(trial, title, f)
                 figures.append(Figure(f, f"{title}: sampled streams"))
-            if "frames" in g:
+            if trial.has_frames:
                 f = out_dir / f"{path.stem}__{name}__frames.png"
-                _frames_figure(g["frames"], title, f)
+                _frames_figure(trial.frames(), title, f)
                 figures.append(Figure(f, f"{title}: image frames"))
     return figures
 

@@ -36,5 +36,5 @@ from .slip_rate import estimate_slip_rates as estimate_slip_rates
 from .slip_rate import fit_common_slope as fit_common_slope
 from .slip_rate import integrate_displacement as integrate_displacement
 from .slip_rate import slip_rate_from_centroids as slip_rate_from_centroids
-from .trial_events import TrialEvents as TrialEvents
-from .trial_events import trial_list as trial_list
+from .trial_events import event_trial_names as event_trial_names
+from .trial_events import spatial_events as spatial_events

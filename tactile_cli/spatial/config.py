@@ -30,6 +30,7 @@ from typing import Any
 
 from ..config_file import parse_yaml, read_config_text
 from ..errors import InputError
+from ..vocabulary import BIN_S
 from .frames import _check_median
 from .optics import StripOptics
 from .roi import POLARITIES, Roi
@@ -48,7 +49,7 @@ class CentroidOptions:
 
     polarity: str = "positive"
     median: int = 1
-    bin_s: float = 0.02
+    bin_s: float = BIN_S
     background: str = "auto"
 
     @property

@@ -8,8 +8,9 @@ suppression (salt-and-pepper noise) was achieved using a median filter" (Fig. 13
 - :func:`accumulate_frames`: events in, per-polarity count frames out, one ``np.bincount``
   over (frame, polarity, pixel) codes for a whole batch of windows;
 - :func:`median_filter_frames`: ``scipy.ndimage.median_filter`` over each frame's plane;
-- :func:`iter_trial_frames`: the frames of one trial of a tactile HDF5 file, read window
-  batch by window batch so memory stays bounded.
+- :func:`iter_trial_frames`: the frames of one trial of a tactile HDF5 file (a
+  :class:`~tactile_cli.store.trials.Trial`), read window batch by window batch so memory
+  stays bounded.
 
 Frames are ``(n_frames, height_px, width_px)``: row ``y``, column ``x``, as the events'
 pixel coordinates (``0 <= x < width_px``, ``0 <= y < height_px``).
@@ -19,12 +20,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
-from .trial_events import TrialEvents
+from ..store.trials import Trial
+from .trial_events import spatial_events
 
 #: Frames accumulated per bincount when a trial is read (3 x 8 x 640 x 480 int64 = 59 MB).
 FRAME_BATCH = 8
@@ -114,8 +115,7 @@ def median_filter_frames(frames: np.ndarray, size: int) -> np.ndarray:
 
 
 def iter_trial_frames(
-    path: str | Path,
-    trial: str,
+    trial: Trial,
     *,
     window_s: float,
     start_s: float = 0.0,
@@ -133,26 +133,21 @@ def iter_trial_frames(
     window_us = round(window_s * 1e6)
     if window_us < 1:
         raise ValueError(f"`window_s` (={window_s}) must be at least 1 us")
-    with TrialEvents(path, trial) as te:
-        stop_s = te.end_s if end_s is None else end_s
-        start_us = te.to_us(start_s)
-        stop_us = te.to_us(stop_s)
-        n_total = max(0, -(-(stop_us - start_us) // window_us))
-        for first in range(0, n_total, batch):
-            n = min(batch, n_total - first)
-            t0_us = start_us + first * window_us
-            t1_us = min(t0_us + n * window_us, stop_us)
-            ev = te.window_us(t0_us, t1_us)
-            pos, neg = accumulate_frames(
-                ev.x, ev.y, ev.t_us, ev.p, width_px=te.sensor.width_px,
-                height_px=te.sensor.height_px, start_us=t0_us, window_us=window_us, n_frames=n,
-            )
-            t_s = start_s + (first + np.arange(n)) * window_us * 1e-6
-            yield EventFrames(t_s, median_filter_frames(pos, median),
-                              median_filter_frames(neg, median), window_us * 1e-6, median)
-
-
-def sensor_of(path: str | Path, trial: str) -> tuple[int, int, float]:
-    """``(width_px, height_px, end_s)`` of one trial's event camera."""
-    with TrialEvents(path, trial) as te:
-        return te.sensor.width_px, te.sensor.height_px, te.end_s
+    te = spatial_events(trial)
+    width_px, height_px = te.sensor.width_px, te.sensor.height_px
+    stop_s = te.end_s if end_s is None else end_s
+    start_us = te.to_us(start_s)
+    stop_us = te.to_us(stop_s)
+    n_total = max(0, -(-(stop_us - start_us) // window_us))
+    for first in range(0, n_total, batch):
+        n = min(batch, n_total - first)
+        t0_us = start_us + first * window_us
+        t1_us = min(t0_us + n * window_us, stop_us)
+        ev = te.window_us(t0_us, t1_us)
+        pos, neg = accumulate_frames(
+            ev.x, ev.y, ev.t_us, ev.p, width_px=width_px, height_px=height_px,
+            start_us=t0_us, window_us=window_us, n_frames=n,
+        )
+        t_s = start_s + (first + np.arange(n)) * window_us * 1e-6
+        yield EventFrames(t_s, median_filter_frames(pos, median),
+                          median_filter_frames(neg, median), window_us * 1e-6, median)

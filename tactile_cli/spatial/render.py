@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 from PIL import Image, PngImagePlugin  # noqa: E402
 
+from ..store.trials import Trial  # noqa: E402
 from .roi import Roi  # noqa: E402
 from .slip_rate import SlipRateEstimate  # noqa: E402
 
@@ -169,8 +170,7 @@ def plot_slip(estimate: SlipRateEstimate, path: str | Path, *,
 
 
 def write_trial_frames(
-    path: str | Path,
-    trial: str,
+    trial: Trial,
     out_dir: str | Path,
     *,
     window_s: float,
@@ -187,13 +187,14 @@ def write_trial_frames(
     False) and ``out_dir/contact_sheet.png`` (up to ``sheet_max`` frames evenly spread over
     the trial, ROIs drawn). Returns a summary: trial, n_frames, window_s, median, kind,
     frames (file names), contact_sheet, sheet_t_s."""
-    from .frames import iter_trial_frames, sensor_of
+    from .frames import iter_trial_frames
+    from .trial_events import spatial_events
 
     if kind not in KINDS:
         raise ValueError(f"`kind` (={kind!r}) must be one of {', '.join(KINDS)}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    _, _, trial_end_s = sensor_of(path, trial)
+    trial_end_s = spatial_events(trial).end_s
     stop_s = trial_end_s if end_s is None else end_s
     window_us = round(window_s * 1e6)
     n_total = max(0, -(-round((stop_s - start_s) * 1e6) // window_us))
@@ -204,23 +205,23 @@ def write_trial_frames(
     sheet: list[tuple[float, np.ndarray]] = []
     names: list[str] = []
     k = 0
-    for batch in iter_trial_frames(path, trial, window_s=window_s, start_s=start_s,
-                                   end_s=stop_s, median=median):
+    for batch in iter_trial_frames(trial, window_s=window_s, start_s=start_s, end_s=stop_s,
+                                   median=median):
         for i in range(batch.n_frames):
             rgb = frame_rgb(batch.positive[i], batch.negative[i], kind=kind)
             if frame_pngs:
                 name = f"frame_{k:04d}.png"
                 write_png(out_dir / name, rgb,
                           meta={**(meta or {}),
-                                "Description": f"{trial} t={batch.t_s[i]:.6f} s"})
+                                "Description": f"{trial.name} t={batch.t_s[i]:.6f} s"})
                 names.append(name)
             if k in chosen:
                 sheet.append((float(batch.t_s[i]), rgb))
             k += 1
-    title = (f"{trial}: {kind} event frames, {window_s * 1e3:g} ms windows"
+    title = (f"{trial.name}: {kind} event frames, {window_s * 1e3:g} ms windows"
              f"{f', median {median}x{median}' if median > 1 else ''}")
     contact_sheet(sheet, out_dir / "contact_sheet.png", rois=rois, title=title,
                   window_s=window_s, meta=meta)
-    return {"trial": trial, "n_frames": k, "window_s": window_s, "median": median, "kind": kind,
-            "frames": names, "contact_sheet": "contact_sheet.png",
+    return {"trial": trial.name, "n_frames": k, "window_s": window_s, "median": median,
+            "kind": kind, "frames": names, "contact_sheet": "contact_sheet.png",
             "sheet_t_s": [t for t, _ in sheet]}

@@ -9,7 +9,8 @@
   after an optional median filter ("after performing data filtering"). Vectorised: one
   ``np.bincount`` per ROI over all bins (a loop over the few ROIs, none over events).
 - :func:`trial_roi_centroids` / :func:`roi_centroid_series`: the same for one trial of a
-  tactile HDF5 file, read a block of bins at a time through the millisecond index.
+  tactile HDF5 file (a :class:`~tactile_cli.store.trials.Trial`), read a block of bins at a
+  time through the millisecond index.
 """
 
 from __future__ import annotations
@@ -23,8 +24,10 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
+from ..store.trials import Trial
+from ..vocabulary import BIN_S
 from .frames import median_filter_frames
-from .trial_events import TrialEvents, region_of
+from .trial_events import spatial_events
 
 Polarity = Literal["positive", "negative", "both"]
 POLARITIES: tuple[str, ...] = ("positive", "negative", "both")
@@ -199,11 +202,10 @@ class RoiCentroids:
 
 
 def trial_roi_centroids(
-    path: str | Path,
-    trial: str,
+    trial: Trial,
     rois: Sequence[Roi],
     *,
-    bin_s: float = 0.02,
+    bin_s: float = BIN_S,
     polarity: str = "positive",
     median: int = 1,
     start_s: float = 0.0,
@@ -216,8 +218,8 @@ def trial_roi_centroids(
     ``end_s`` defaults to the trial's end. ``background_px_hz`` (events of ``polarity`` per
     pixel per second, e.g. from :func:`background_rate`) is subtracted from every pixel
     of every bin before the centroid is taken (:func:`subtract_background`); it needs
-    ``median == 1``. Raises :class:`InputError` for an unknown trial or an ROI off the
-    sensor.
+    ``median == 1``. Raises :class:`InputError` for a trial without events or an ROI off
+    the sensor.
     """
     if background_px_hz and median != 1:
         raise ValueError("`background_px_hz` applies to unfiltered counts only (median == 1); "
@@ -226,21 +228,21 @@ def trial_roi_centroids(
     if bin_us < 1 or abs(bin_us - bin_s * 1e6) > 1e-6 * bin_s * 1e6:
         raise ValueError(f"`bin_s` (={bin_s}) must be a positive whole number of microseconds")
     rois = tuple(rois)
-    with TrialEvents(path, trial) as te:
-        check_rois_on_sensor(rois, te.sensor.width_px, te.sensor.height_px)
-        stop_s = te.end_s if end_s is None else end_s
-        start_us = te.to_us(start_s)
-        n_bins = max(0, -(-(te.to_us(stop_s) - start_us) // bin_us))
-        sums = np.zeros((n_bins, len(rois), 3), dtype=np.float64)
-        for first in range(0, n_bins, chunk_bins):
-            n = min(chunk_bins, n_bins - first)
-            t0 = start_us + first * bin_us
-            ev = te.window_us(t0, t0 + n * bin_us)
-            sums[first:first + n] = roi_weight_sums(
-                ev.x, ev.y, ev.t_us, ev.p, rois, start_us=t0, bin_us=bin_us, n_bins=n,
-                polarity=polarity, median=median, width_px=te.sensor.width_px,
-                height_px=te.sensor.height_px,
-            )
+    te = spatial_events(trial)
+    width_px, height_px = te.sensor.width_px, te.sensor.height_px
+    check_rois_on_sensor(rois, width_px, height_px)
+    stop_s = te.end_s if end_s is None else end_s
+    start_us = te.to_us(start_s)
+    n_bins = max(0, -(-(te.to_us(stop_s) - start_us) // bin_us))
+    sums = np.zeros((n_bins, len(rois), 3), dtype=np.float64)
+    for first in range(0, n_bins, chunk_bins):
+        n = min(chunk_bins, n_bins - first)
+        t0 = start_us + first * bin_us
+        ev = te.window_us(t0, t0 + n * bin_us)
+        sums[first:first + n] = roi_weight_sums(
+            ev.x, ev.y, ev.t_us, ev.p, rois, start_us=t0, bin_us=bin_us, n_bins=n,
+            polarity=polarity, median=median, width_px=width_px, height_px=height_px,
+        )
     if background_px_hz:
         sums = subtract_background(sums, rois, background_px_hz * bin_us * 1e-6)
     t_s = start_s + (np.arange(n_bins) + 0.5) * bin_us * 1e-6
@@ -264,23 +266,23 @@ def subtract_background(sums: np.ndarray, rois: Sequence[Roi], per_px: float) ->
     return out
 
 
-def background_rate(path: str | Path, trial: str, *, region: str = "approach",
+def background_rate(trial: Trial, *, region: str = "approach",
                     polarity: str = "positive") -> float | None:
     """Events of ``polarity`` per pixel per second over the whole sensor during the trial's
     annotated ``region`` (the approach, before contact: background only), or None when the
     trial has no such annotation or it is empty. Assumes the background is uniform over
     the sensor."""
-    with TrialEvents(path, trial) as te:
-        span = region_of(te.annotations(), region)
-        if span is None or span[1] <= span[0]:
-            return None
-        ev = te.window(*span)
-        n = int(_polarity_mask(ev.p, polarity).sum())
-        return n / (te.sensor.width_px * te.sensor.height_px * (span[1] - span[0]))
+    te = spatial_events(trial)
+    span = trial.annotation(region)
+    if span is None or span.end_s <= span.start_s:
+        return None
+    ev = te.window(span.start_s, span.end_s)
+    n = int(_polarity_mask(ev.p, polarity).sum())
+    return n / (te.sensor.width_px * te.sensor.height_px * (span.end_s - span.start_s))
 
 
 def roi_centroid_series(
-    path: str | Path, trial: str, rois: Sequence[Roi], bin_s: float = 0.02, *,
+    trial: Trial, rois: Sequence[Roi], bin_s: float = BIN_S, *,
     polarity: str = "positive", median: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Centroid trajectories of one trial as model features.
@@ -289,7 +291,7 @@ def roi_centroid_series(
     (n_bins, n_rois, 2) float64 ``[x_bar, y_bar]`` px per ROI (eq. 19), NaN in bins where
     an ROI has no events of ``polarity``.
     """
-    c = trial_roi_centroids(path, trial, rois, bin_s=bin_s, polarity=polarity, median=median)
+    c = trial_roi_centroids(trial, rois, bin_s=bin_s, polarity=polarity, median=median)
     return c.t_s, c.centroid_px
 
 
@@ -351,24 +353,22 @@ def propose_rois(
 
 
 def event_density(
-    path: str | Path, trial: str, *, regions: Sequence[str] = ("press",),
-    polarity: str = "positive",
+    trial: Trial, *, regions: Sequence[str] = ("press",), polarity: str = "positive",
 ) -> np.ndarray:
     """(height_px, width_px) int64 events of ``polarity`` per pixel over the trial's
     annotated ``regions`` (the press by default); InputError when the trial lacks one."""
-    with TrialEvents(path, trial) as te:
-        annotations = te.annotations()
-        w, h = te.sensor.width_px, te.sensor.height_px
-        density = np.zeros(h * w, dtype=np.int64)
-        for region in regions:
-            span = region_of(annotations, region)
-            if span is None:
-                raise InputError(f"trial has no {region!r} annotation to propose ROIs from; "
-                                 "give the ROIs with --rois", path=path, where=f"/trials/{trial}")
-            t = span[0]
-            while t < span[1]:  # one-second blocks keep memory bounded on long regions
-                ev = te.window(t, min(t + 1.0, span[1]))
-                keep = _polarity_mask(ev.p, polarity)
-                density += np.bincount(ev.y[keep] * w + ev.x[keep], minlength=h * w)
-                t += 1.0
+    te = spatial_events(trial)
+    w, h = te.sensor.width_px, te.sensor.height_px
+    density = np.zeros(h * w, dtype=np.int64)
+    for region in regions:
+        span = trial.annotation(region)
+        if span is None:
+            raise InputError(f"trial has no {region!r} annotation to propose ROIs from; "
+                             "give the ROIs with `config`", path=trial.path, where=trial.where)
+        t = span.start_s
+        while t < span.end_s:  # one-second blocks keep memory bounded on long regions
+            ev = te.window(t, min(t + 1.0, span.end_s))
+            keep = _polarity_mask(ev.p, polarity)
+            density += np.bincount(ev.y[keep] * w + ev.x[keep], minlength=h * w)
+            t += 1.0
     return density.reshape(h, w)

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..store.trials import TactileFile, Trial
 from .config import CentroidOptions, SlipOptions, SpatialConfig
 from .optics import StripOptics
 from .roi import (
@@ -44,7 +45,7 @@ from .roi import (
     propose_rois,
     trial_roi_centroids,
 )
-from .trial_events import TrialEvents, region_of, trial_list
+from .trial_events import event_trial_names, spatial_events
 
 #: Fewest bins with a centroid in the fit region for a slope to be reported.
 MIN_FIT_BINS = 5
@@ -320,16 +321,16 @@ def resolve_optics(config: SpatialConfig | None, sensor_optics: dict[str, float]
     missing = [k for k in keys if k not in sensor_optics]
     if missing:
         raise InputError(f"no optics to convert px to m: the sensor lacks {', '.join(missing)} "
-                         "and no config gave them; pass --rois CONFIG with an `optics:` "
+                         "and no config gave them; pass `config=CONFIG` with an `optics:` "
                          "section (pixel_pitch_m, focal_length_m, strip_distance_m)", path=path)
     return StripOptics(*(sensor_optics[k] for k in keys))
 
 
-def _slip_region(te: TrialEvents) -> tuple[tuple[float, float] | None, str]:
-    span = region_of(te.annotations(), "slip")
+def _slip_region(trial: Trial) -> tuple[tuple[float, float] | None, str]:
+    span = trial.annotation("slip")
     if span is not None:
-        return span, "annotations"
-    lab = te.labels
+        return (span.start_s, span.end_s), "annotations"
+    lab = trial.labels
     if "slip_start_s" in lab and "release_start_s" in lab:
         try:
             return (float(lab["slip_start_s"]), float(lab["release_start_s"])), "labels"
@@ -350,8 +351,7 @@ def _truth(labels: dict[str, Any]) -> float | None:
 
 
 def estimate_slip_rate(
-    path: str | Path,
-    trial: str,
+    trial: Trial,
     config: SpatialConfig | None = None,
 ) -> SlipRateEstimate:
     """Eqs. 19-21 and the Fig. 23 slope for one trial of a tactile HDF5 file.
@@ -359,49 +359,50 @@ def estimate_slip_rate(
     ROIs and optics come from ``config``; without one (or one without optics) the optics
     come from the sensor's attributes, and without ROIs they are proposed from the
     positive-event density of the trial's slip region, which covers the strips' whole path
-    (:func:`~.roi.propose_rois`, padded by 10 px). Input errors (unknown trial, ROI off the
-    sensor, no optics) raise :class:`InputError`; a trial whose slip cannot be measured
-    returns a result whose ``status`` says why.
+    (:func:`~.roi.propose_rois`, padded by 10 px). Input errors (trial without events, ROI
+    off the sensor, no optics) raise :class:`InputError`; a trial whose slip cannot be
+    measured returns a result whose ``status`` says why.
     """
-    with TrialEvents(path, trial) as te:
-        if config is not None:
-            config.check_sensor(te.sensor.width_px, te.sensor.height_px)
-        optics = resolve_optics(config, te.sensor.optics, path=path)
-        span, source = _slip_region(te)
-        truth = _truth(te.labels)
+    te = spatial_events(trial)
+    if config is not None:
+        config.check_sensor(te.sensor.width_px, te.sensor.height_px)
+    optics = resolve_optics(config, te.sensor.optics, path=trial.path)
+    span, source = _slip_region(trial)
+    truth = _truth(trial.labels)
     opts = config.centroid if config is not None else CentroidOptions()
     polarity, median, bin_s = opts.polarity, opts.median, opts.bin_s
     edge_trim_s = config.slip.edge_trim_s if config is not None else SlipOptions().edge_trim_s
-    res = SlipRate(trial=trial, strip_m_per_px=optics.strip_m_per_px, truth_speed_m_s=truth)
+    res = SlipRate(trial=trial.name, strip_m_per_px=optics.strip_m_per_px,
+                   truth_speed_m_s=truth)
     if span is None:
         res.status = "no_slip_region"
         res.message = ("the trial has no `slip` annotation and no slip_start_s/"
                        "release_start_s labels")
         return SlipRateEstimate(res, None)
     if config is None or not config.rois:
-        density = event_density(path, trial, regions=("slip",), polarity=polarity)
+        density = event_density(trial, regions=("slip",), polarity=polarity)
         rois: Sequence[Roi] = propose_rois(density, pad_px=(10, 10))
         if not rois:
             res.status = "no_rois"
-            res.message = "no dense event region to propose ROIs from; give --rois"
+            res.message = "no dense event region to propose ROIs from; give the ROIs with `config`"
             return SlipRateEstimate(res, None)
     else:
         rois = config.rois
     background = None
     note = ""
     if opts.subtract_background:
-        background = background_rate(path, trial, region="approach", polarity=polarity)
+        background = background_rate(trial, region="approach", polarity=polarity)
         if background is None:
             note = "no approach annotation: background not subtracted"
     # centroids only where they are used: the slip region plus a margin for the plot
     margin = max(0.5, 0.25 * (span[1] - span[0]))
-    c = trial_roi_centroids(path, trial, rois, bin_s=bin_s, polarity=polarity, median=median,
+    c = trial_roi_centroids(trial, rois, bin_s=bin_s, polarity=polarity, median=median,
                             start_s=max(0.0, span[0] - margin), end_s=span[1] + margin,
                             background_px_hz=background or 0.0)
     out, trace = slip_rate_from_centroids(c.t_s, c.centroid_px[..., 1], c.weight,
                                           slip_start_s=span[0],
                                           slip_end_s=span[1], edge_trim_s=edge_trim_s,
-                                          optics=optics, trial=trial)
+                                          optics=optics, trial=trial.name)
     out.region_source = source
     out.truth_speed_m_s = truth
     out.background_px_hz = background
@@ -421,17 +422,19 @@ def estimate_slip_rates(
     *,
     trials: Sequence[str] | None = None,
 ) -> list[SlipRateEstimate]:
-    """:func:`estimate_slip_rate` for every trial with events (or the ones named)."""
-    names = trial_list(path) if not trials else list(trials)
-    if trials:
-        known = set(trial_list(path))
+    """:func:`estimate_slip_rate` for every trial with events (or the ones named), the
+    file opened once."""
+    with TactileFile(path) as tf:
+        known = event_trial_names(tf)
+        names = known if not trials else list(trials)
         for name in names:
             if name not in known:
                 raise InputError(f"no trial {name!r} with events; see `tactile info {path}`",
                                  path=path)
-    for name in names:  # every trial's input checked before the first is measured
-        with TrialEvents(path, name) as te:
+        chosen = [tf.trial(name) for name in names]  # as named, repeats included
+        for trial in chosen:  # every trial's input checked before the first is measured
+            te = spatial_events(trial)
             if config is not None:
                 config.check_sensor(te.sensor.width_px, te.sensor.height_px)
             resolve_optics(config, te.sensor.optics, path=path)
-    return [estimate_slip_rate(path, name, config) for name in names]
+        return [estimate_slip_rate(trial, config) for trial in chosen]

@@ -46,16 +46,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.reader import attr_value
+from ..store.trials import TactileFile, Trial
 from ..store.writer import StoreWriter
 from .config import SpatialConfig
 from .roi import Roi, trial_roi_centroids
-from .trial_events import TrialEvents, trial_list
+from .trial_events import event_trial_names, spatial_events
 
 #: Name of the stream (``/trials/{t}/signals/roi_centroids``) and of its sensor.
 STREAM = "roi_centroids"
@@ -185,20 +184,18 @@ class CentroidFileResult:
         }
 
 
-def trial_centroid_stream(path: str | Path, trial: str, config: SpatialConfig
-                          ) -> CentroidTrialStream:
+def trial_centroid_stream(trial: Trial, config: SpatialConfig) -> CentroidTrialStream:
     """Eq. 19 per ROI per bin of one event trial (the config's ROIs, polarity, median and
     bin width), filled and flagged (:func:`centroid_features`), with action labels."""
     from ..events.accumulate import counts_to_labels  # lazy: pulls in the FOS package
 
     opts = config.centroid
-    c = trial_roi_centroids(path, trial, config.rois, bin_s=opts.bin_s,
+    c = trial_roi_centroids(trial, config.rois, bin_s=opts.bin_s,
                             polarity=opts.polarity, median=opts.median)
-    with TrialEvents(path, trial) as te:
-        annotations = te.annotations()
+    annotations = trial.annotations
     action = counts_to_labels(c.t_s, annotations).astype(np.int8) if annotations else None
     data = centroid_features(c.centroid_px, c.weight, config.rois, bin_s=opts.bin_s)
-    return CentroidTrialStream(trial, c.t_s, data, action, tuple(annotations))
+    return CentroidTrialStream(trial.name, c.t_s, data, action, tuple(annotations))
 
 
 def _check_config(config: SpatialConfig) -> None:
@@ -234,51 +231,47 @@ def write_centroid_file(
     trial, a config without ROIs or for another sensor size, and a file without event
     trials.
     """
-    from ..fos.actions import ACTIONS
+    from ..vocabulary import ACTIONS
 
     path = Path(path)
     _check_config(config)
-    names = trial_list(path)
-    if trials:
-        missing = [t for t in trials if t not in names]
-        if missing:
-            raise InputError(f"no event trial {missing[0]!r}; the file's event trials: "
-                             f"{', '.join(names[:10]) or 'none'}", path=path)
-        names = list(trials)
-    if not names:
-        raise InputError("the file has no event trials", path=path)
-    progress = progress or NullProgress()
-    with TrialEvents(path, names[0]) as te:
-        sensor = te.sensor
-    config.check_sensor(sensor.width_px, sensor.height_px)
-    optics = config.optics.as_dict() if config.optics is not None else sensor.optics
-    done: list[CentroidTrialStream] = []
-    with StoreWriter(out, command=command, config=provenance, overwrite=overwrite) as w:
-        source = w.add_source(path)
-        s = add_centroid_sensor(
-            w, config.rois, bin_s=config.centroid.bin_s, width_px=sensor.width_px,
-            height_px=sensor.height_px, polarity=config.centroid.polarity,
-            median=config.centroid.median, optics=optics, source_sensor=sensor.name,
-            description="event-weighted centroid (eq. 19) of each ROI per bin, filled with the "
-                        "ROI centre and flagged where the ROI had no events")
-        progress.start(len(names), "ROI centroids")
-        with h5py.File(path, "r") as src:
+    with TactileFile(path) as src:
+        names = event_trial_names(src)
+        if trials:
+            missing = [t for t in trials if t not in names]
+            if missing:
+                raise InputError(f"no event trial {missing[0]!r}; the file's event trials: "
+                                 f"{', '.join(names[:10]) or 'none'}", path=path)
+            names = list(trials)
+        if not names:
+            raise InputError("the file has no event trials", path=path)
+        progress = progress or NullProgress()
+        sensor = spatial_events(src.trial(names[0])).sensor
+        config.check_sensor(sensor.width_px, sensor.height_px)
+        optics = config.optics.as_dict() if config.optics is not None else sensor.optics
+        done: list[CentroidTrialStream] = []
+        with StoreWriter(out, command=command, config=provenance, overwrite=overwrite) as w:
+            source = w.add_source(path)
+            s = add_centroid_sensor(
+                w, config.rois, bin_s=config.centroid.bin_s, width_px=sensor.width_px,
+                height_px=sensor.height_px, polarity=config.centroid.polarity,
+                median=config.centroid.median, optics=optics, source_sensor=sensor.name,
+                description="event-weighted centroid (eq. 19) of each ROI per bin, filled with "
+                            "the ROI centre and flagged where the ROI had no events")
+            progress.start(len(names), "ROI centroids")
             for name in names:
-                stream = trial_centroid_stream(path, name, config)
-                g = src["trials"][name]
-                labels = {k: attr_value(v) for k, v in g["labels"].attrs.items()} \
-                    if "labels" in g else {}
-                tw = w.trial(name, labels=labels, split=str(attr_value(g.attrs.get("split", ""))),
-                             sources=[source], annotations=stream.annotations,
-                             duration_s=float(g.attrs.get("duration_s", 0.0)))
+                trial = src.trial(name)
+                stream = trial_centroid_stream(trial, config)
+                tw = w.trial(name, labels=trial.labels, split=trial.split, sources=[source],
+                             annotations=stream.annotations, duration_s=trial.duration_s)
                 sample_labels = {} if stream.action is None else {
                     "action": (stream.action, ACTIONS)}
                 tw.write_signal(STREAM, sensor=s, data=stream.data, t_s=stream.t_s,
                                 sample_labels=sample_labels)
                 done.append(stream)
                 progress.advance(1)
-        progress.finish()
-        written = w.commit()
+            progress.finish()
+            written = w.commit()
     return CentroidFileResult(written, tuple(done), tuple(config.rois), config.centroid.bin_s)
 
 

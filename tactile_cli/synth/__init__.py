@@ -98,11 +98,11 @@ def centroid_model(rois: str | Path, config: SynthConfig) -> CentroidModel:
 
     spatial = load_config(rois)
     if not spatial.rois:
-        raise InputError("the ROI config lists no ROIs; --centroids needs them under `rois:`",
+        raise InputError("the ROI config lists no ROIs; `centroids` needs them under `rois:`",
                          path=rois)
     if spatial.optics is None:
         raise InputError("the ROI config has no `optics` (pixel_pitch_m, focal_length_m, "
-                         "strip_distance_m); --centroids needs them to turn slip speeds in m/s "
+                         "strip_distance_m); `centroids` needs them to turn slip speeds in m/s "
                          "into px/s (eq. 15)", path=rois)
     spatial.check_sensor(config.width_px, config.height_px)
     if abs(spatial.centroid.bin_s - config.bin_s) > 1e-12:

@@ -32,12 +32,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
 from ..fos.regions import label_int
 from ..fos.table import GROUP_NAMES, read_fit_group
+from ..store.trials import TactileFile
 from .config import SynthConfig
 
 PRESS_NAMES = ("alpha_press", "tau_press_s", "press_duration_s")
@@ -122,25 +122,24 @@ def from_config(config: SynthConfig) -> tuple[LevelDistribution, LevelDistributi
     return press, slip
 
 
-def _trial_labels(path: Path, trials: np.ndarray) -> tuple[np.ndarray, list[str | None]]:
+def _trial_labels(file: TactileFile, trials: np.ndarray) -> tuple[np.ndarray, list[str | None]]:
     """force_level (int) and force_grade (or None) of each trial named in a fits group."""
     levels, grades = [], []
-    with h5py.File(path, "r") as h5:
-        for name in trials:
-            where = f"/trials/{name}/labels"
-            if where not in h5:
-                raise InputError(f"the fits name trial {name!r}, which the file does not have; "
-                                 "re-run `tactile fit-fos --overwrite`", path=path)
-            attrs = h5[where].attrs
-            level = label_int(attrs.get("force_level"))
-            if level is None:
-                raise InputError("no integer force_level label; synth draws parameters per "
-                                 "force level (ingest with --trial-labels, or label the trials)",
-                                 path=path, where=where)
-            grade = attrs.get("force_grade")
-            levels.append(level)
-            grades.append(None if grade is None else (grade.decode() if isinstance(grade, bytes)
-                                                      else str(grade)))
+    path = file.path
+    for name in map(str, trials):
+        if name not in file.trial_names:
+            raise InputError(f"the fits name trial {name!r}, which the file does not have; "
+                             "re-run `tactile fit-fos --overwrite`", path=path)
+        trial = file.trial(name)
+        level = label_int(trial.labels.get("force_level"))
+        if level is None:
+            raise InputError("no integer force_level label; synth draws parameters per "
+                             "force level (label the trials, e.g. `tactile ingest "
+                             "--trial-labels FILE`)",
+                             path=path, where=f"{trial.where}/labels")
+        grade = trial.labels.get("force_grade")
+        levels.append(level)
+        grades.append(None if grade is None else str(grade))
     return np.array(levels, dtype=np.int64), grades
 
 
@@ -189,13 +188,15 @@ def from_fits(
     path = Path(path)
     press = read_fit_group(path, GROUP_NAMES["press"])
     slip = read_fit_group(path, GROUP_NAMES["slip"])
-    with h5py.File(path, "r") as h5:
-        duration_fitted = bool(h5[f"/derived/fits/{GROUP_NAMES['press']}"].attrs.get(
+    with TactileFile(path) as f:
+        duration_fitted = bool(f.derived("fits", GROUP_NAMES["press"], columns=[]).attrs.get(
             "duration_fitted", False))
+        trial_labels = {region: _trial_labels(f, cols["trial"])
+                        for region, cols in (("press", press), ("slip", slip))}
     grades: dict[int, str] = {}
     out = []
     for region, cols, names in (("press", press, PRESS_NAMES), ("slip", slip, SLIP_NAMES)):
-        levels, trial_grades = _trial_labels(path, cols["trial"])
+        levels, trial_grades = trial_labels[region]
         for level, grade in zip(levels, trial_grades, strict=True):
             if grade is not None and grades.setdefault(int(level), grade) != grade:
                 raise InputError(f"force_level {level} has two force_grade labels "

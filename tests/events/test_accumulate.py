@@ -16,9 +16,15 @@ from tactile_cli.events import (
     trial_counts,
 )
 from tactile_cli.events import accumulate as acc_module
-from tactile_cli.store import StoreWriter
+from tactile_cli.store import StoreWriter, TactileFile
 
-from .synth import events_from_counts
+from ..factories.event_counts import events_from_counts
+
+
+def file_counts(path, trial, **kwargs):
+    """:func:`trial_counts` of trial ``trial`` of the file ``path``."""
+    with TactileFile(path) as tf:
+        return trial_counts(tf.trial(trial), **kwargs)
 
 
 def naive_bins(t_us, p, bin_us, start_us, n_bins):
@@ -166,7 +172,7 @@ def test_trial_counts_equals_bin_events_read_in_blocks(tmp_path, monkeypatch):
     ev = events_from_counts(pos, neg, rng, start_us=start + 4321)
     f = _write_event_file(tmp_path / "e.h5", {"rec": ev}, origin=start)
     monkeypatch.setattr(acc_module, "READ_BLOCK", 4096)  # many blocks
-    c = trial_counts(f, "rec")
+    c = file_counts(f, "rec")
     ref = bin_events(ev["t"], ev["p"], start_us=start)
     np.testing.assert_array_equal(c.positive, ref.positive)
     np.testing.assert_array_equal(c.negative, ref.negative)
@@ -182,14 +188,14 @@ def test_trial_counts_origin_defaults_and_skips_events_before_it(tmp_path):
     pos, neg = rng.poisson(50, 40), rng.poisson(20, 40)
     ev = events_from_counts(pos, neg, rng, start_us=0)
     f = _write_event_file(tmp_path / "e.h5", {"rec": ev})  # times from 0: origin 0
-    c = trial_counts(f, "rec")
+    c = file_counts(f, "rec")
     np.testing.assert_array_equal(c.positive, pos)
     np.testing.assert_array_equal(c.negative, neg)
     # an origin after some events: those are counted as outside, the rest re-binned
     with h5py.File(f, "r+") as h5:
         h5["trials/rec/events"].attrs["t_origin_us"] = 30_500
         h5["trials/rec"].attrs["duration_s"] = (int(ev["t"][-1]) - 30_500) * 1e-6
-    late = trial_counts(f, "rec")
+    late = file_counts(f, "rec")
     ref = bin_events(ev["t"], ev["p"], start_us=30_500, end_us=int(ev["t"][-1]) + 1)
     np.testing.assert_array_equal(late.positive, ref.positive)
     assert late.n_outside == int((ev["t"] < 30_500).sum()) > 0
@@ -197,7 +203,7 @@ def test_trial_counts_origin_defaults_and_skips_events_before_it(tmp_path):
     with h5py.File(f, "r+") as h5:
         del h5["trials/rec/events"].attrs["t_origin_us"]
         first = int(h5["trials/rec/events"].attrs["ms_index_origin_us"])
-    old = trial_counts(f, "rec")
+    old = file_counts(f, "rec")
     assert old.start_us == first
 
 
@@ -206,16 +212,16 @@ def test_trial_counts_errors(tmp_path):
     ev = events_from_counts(rng.poisson(5, 10), rng.poisson(5, 10), rng)
     f = _write_event_file(tmp_path / "e.h5", {"rec": ev})
     with pytest.raises(InputError) as err:
-        trial_counts(f, "nope")
+        file_counts(f, "nope")
     assert str(err.value) == f"{f}: no trial 'nope'; the file has 2 trial(s): rec, no_events"
     with pytest.raises(InputError) as err:
-        trial_counts(f, "no_events")
+        file_counts(f, "no_events")
     assert str(err.value) == (f"{f}, /trials/no_events: trial has no events (event counts "
                               "need an event-camera recording)")
     text = tmp_path / "x.h5"
     text.write_text("not hdf5")
     with pytest.raises(InputError, match="not a readable HDF5 file"):
-        trial_counts(text, "rec")
+        file_counts(text, "rec")
 
 
 def test_counts_to_labels_by_bin_centre():

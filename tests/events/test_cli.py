@@ -13,10 +13,10 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.events import bin_events
-from tactile_cli.fos.actions import ACTIONS
 from tactile_cli.store import StoreWriter, validate_file
+from tactile_cli.vocabulary import ACTIONS
 
-from .synth import events_from_counts, make_trial, random_params
+from ..factories.event_counts import events_from_counts, make_trial, random_params
 
 runner = CliRunner()
 

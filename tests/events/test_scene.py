@@ -14,12 +14,11 @@ from typer.testing import CliRunner
 from tactile_cli.cli import app
 from tactile_cli.events import (
     counts_to_labels,
-    read_annotations,
     segment_actions,
     segmentation_accuracy,
     trial_counts,
 )
-from tactile_cli.store import trial_names, validate_file
+from tactile_cli.store import TactileFile, trial_names, validate_file
 
 runner = CliRunner()
 
@@ -49,9 +48,10 @@ def test_segmentation_recovers_the_scene_regions(scene_file):
     names = trial_names(scene_file)
     assert len(names) == 12
     accuracy, errors = [], []
-    for name in names:
-        counts = trial_counts(scene_file, name)
-        annotations = read_annotations(scene_file, name)
+    with TactileFile(scene_file) as tf:
+        scene = {t.name: (trial_counts(t), t.annotations) for t in tf.trials(names)}
+    for name, read in scene.items():
+        counts, annotations = read
         assert [a[2] for a in annotations] == ["approach", "press", "slip", "release"]
         assert counts.n_outside == 0 and counts.start_us == 0
         assert counts.end_s == pytest.approx(annotations[-1][1], abs=0.02)

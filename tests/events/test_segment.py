@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from tactile_cli.events import Segmentation, segment_actions, segmentation_accuracy
-from tactile_cli.fos.actions import ACTIONS, net_count_components
+from tactile_cli.fos.actions import net_count_components
+from tactile_cli.vocabulary import ACTIONS
 
-from .synth import make_trial
+from ..factories.event_counts import make_trial
 
 N_TRIALS = 100
 

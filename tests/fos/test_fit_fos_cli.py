@@ -20,7 +20,7 @@ from tactile_cli.fos import pulse_response
 from tactile_cli.fos.table import COLUMNS
 from tactile_cli.store import validate_file
 
-from .counts_files import use_test_compilation_cache, write_counts_file
+from ..factories.fos_counts import use_test_compilation_cache, write_counts_file
 
 runner = CliRunner()
 PAPER_R_PRESS = 0.983138

@@ -1,6 +1,6 @@
 """Press/slip regions of a tactile file and the fit-fos protocol (paper 000, sec. 4.2).
 
-Files from :mod:`tests.fos.counts_files`: 12 trials with known FOS parameters, Poisson
+Files from :mod:`tests.factories.fos_counts`: 12 trials with known FOS parameters, Poisson
 counts like the scene's (press regions <= 96 bins, slips <= 64 bins, so every test here
 shares one compiled solver per model).
 """
@@ -16,7 +16,7 @@ from tactile_cli.fos import FitStatus, fit_pulse
 from tactile_cli.fos.protocol import NO_REGIONS, PRESS_FAILED, fit_regions, region_arrays
 from tactile_cli.fos.regions import read_trial_regions
 
-from .counts_files import use_test_compilation_cache, write_counts_file
+from ..factories.fos_counts import use_test_compilation_cache, write_counts_file
 
 PAPER_R_PRESS = 0.983138
 PAPER_R_SLIP = 0.999762
@@ -80,12 +80,13 @@ def test_region_errors(tmp_path, counts_file):
     with pytest.raises(InputError) as exc:
         read_trial_regions(bare, regions="annotations")
     assert str(exc.value) == (f"{bare}, /trials/trial_00: no 'press' and 'slip' annotations; "
-                              "add them at ingest (--annotations) or pass --regions detect")
+                              "add them at ingest (`tactile ingest --annotations FILE`) or pass "
+                              "`regions='detect'`")
     path, _ = counts_file
     with pytest.raises(InputError) as exc:
         read_trial_regions(path, bin_s=0.01)
     assert str(exc.value) == (f"{path}, /trials/trial_00/signals/event_counts: the stream's "
-                              "bins are 20 ms, not the 10 ms asked for; pass --bin-ms 20")
+                              "bins are 20 ms, not the 10 ms asked for; pass `bin_s=0.02`")
     with pytest.raises(InputError, match="no trial 'nope'"):
         read_trial_regions(path, trials=["nope"])
     with pytest.raises(ValueError, match="`regions`"):
@@ -207,5 +208,5 @@ def test_a_trial_without_regions_is_reported(counts_file):
         rf = fits[region]
         assert rf.status[2] == NO_REGIONS and not rf.ok[2]
         assert rf.message(2) == ("no press and slip regions (segmentation failed: only one "
-                                 "peak); annotate the trial (--annotations)")
+                                 "peak); annotate the trial (`tactile ingest --annotations FILE`)")
         assert rf.ok[[0, 1, 3]].all()

@@ -18,7 +18,7 @@ from tactile_cli.grade import (
     save_config,
 )
 
-from .synth import expected_press, grades_of, level_alpha, press_areas
+from ..factories.press_regions import expected_press, grades_of, level_alpha, press_areas
 
 REPO = Path(__file__).resolve().parents[2]
 

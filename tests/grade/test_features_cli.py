@@ -11,11 +11,11 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.fos.actions import ACTIONS, BIN_S
 from tactile_cli.grade import default_config_path, load_areas, load_config, press_area
 from tactile_cli.store import StoreWriter
+from tactile_cli.vocabulary import ACTIONS, BIN_S
 
-from .synth import expected_press, level_alpha
+from ..factories.press_regions import expected_press, level_alpha
 
 runner = CliRunner()
 
@@ -212,3 +212,26 @@ def _copy_without_fits(tmp_path):
     path = tmp_path / "plain.h5"
     _stream_file(path, [1])
     return path
+
+
+def test_segmentation_gives_the_region_of_a_trial_without_annotations(tmp_path):
+    from ..factories.event_counts import make_trial
+
+    trial = make_trial(np.random.default_rng(5))
+    net = (trial.positive - trial.negative).astype(float)
+    with StoreWriter(tmp_path / "u.h5", command="test") as w:
+        s = w.add_sensor("event_counts", kind="event_camera", sample_rate_hz=1 / BIN_S,
+                         channel_names=["net"], channel_units="events/bin", width_px=64,
+                         height_px=48, bin_s=BIN_S)
+        for name, values in (("found", net), ("flat", np.zeros(100))):
+            w.trial(name).write_signal("event_counts", sensor=s, data=values,
+                                       t_s=(np.arange(values.size) + 0.5) * BIN_S)
+        w.commit()
+    found, flat = load_areas([tmp_path / "u.h5"])
+    tl = trial.timeline
+    assert found.source == "segmentation" and found.status == "ok"
+    assert found.region_start_s == pytest.approx(tl.press_start_s, abs=2 * BIN_S)
+    assert found.region_end_s == pytest.approx(tl.slip_start_s, abs=3 * BIN_S)
+    assert found.area == press_area(net, (np.arange(net.size) + 0.5) * BIN_S,
+                                    found.region_start_s, found.region_end_s)
+    assert np.isnan(flat.area) and flat.status.startswith("segmentation failed: ")

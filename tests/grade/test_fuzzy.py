@@ -142,7 +142,9 @@ def test_chunks_and_large_batches():
     s = _system(1001)
     x = np.random.default_rng(0).uniform(0, 70, 200_000)
     a, b = infer(s, x), infer(s, x, chunk=7919)
-    np.testing.assert_array_equal(a.crisp, b.crisp)
+    # the same sums in other block sizes: BLAS may round the last bit differently
+    np.testing.assert_allclose(a.crisp, b.crisp, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(a.grade, b.grade)
     assert a.firing.shape == (200_000, 6)
 
 

@@ -29,7 +29,8 @@ def test_unknown_and_mixed_formats(tmp_path):
     with pytest.raises(InputError, match="unknown format 'hdf4'; use one of"):
         detect_format([tmp_path / "a.csv"], IngestOptions(format="hdf4"))
     (tmp_path / "d").mkdir()
-    with pytest.raises(InputError, match="cannot tell the format of a folder; pass --format"):
+    with pytest.raises(InputError,
+                       match="cannot tell the format of a folder; pass `format='accel-tree'`"):
         detect_format([tmp_path / "d"], IngestOptions())
 
 
@@ -40,7 +41,7 @@ def test_parse_labels():
         "force_level": 3,
         "note": "a=b",
     }
-    with pytest.raises(InputError, match="--label 'object' must look like key=value"):
+    with pytest.raises(InputError, match="`labels` 'object' must look like key=value"):
         parse_labels(["object"])
 
 

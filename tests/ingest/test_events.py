@@ -119,7 +119,7 @@ def test_aedat4_bad_files(tmp_path, damage):
     else:
         shutil.copy(src, bad)
         options = IngestOptions(width_px=640)
-        message = r"bad\.aedat4: --width 640 disagrees with the file's sensor size 320x240 px"
+        message = r"bad\.aedat4: `width_px` 640 disagrees with the file's sensor size 320x240 px"
     out = tmp_path / "out.h5"
     with pytest.raises(InputError, match=message):
         ingest([bad], out, options=options)
@@ -358,7 +358,7 @@ def test_float_or_nan_columns_are_refused_by_the_appender(tmp_path):
 def test_csv_without_geometry_or_events(tmp_path):
     src = tmp_path / "rec.csv"
     write_events_csv(src, 10, width=W, height=H, seed=1)
-    with pytest.raises(InputError, match="pass --width and --height"):
+    with pytest.raises(InputError, match="pass `width_px` and `height_px`"):
         ingest([src], tmp_path / "o.h5", options=IngestOptions())
     src.write_text("t,x,y,p\n\n")
     with pytest.raises(InputError, match=rf"^{src}, line 2: no events after the header"):

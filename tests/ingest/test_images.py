@@ -237,7 +237,7 @@ def test_folders_of_different_sizes_are_refused(tmp_path):
 
 def test_width_option_must_match_the_frames(tmp_path):
     _seq(tmp_path / "seq", n=2)
-    with pytest.raises(InputError, match=rf"--width is 320 px but the frames are {W}x{H} px"):
+    with pytest.raises(InputError, match=rf"`width_px` is 320 px but the frames are {W}x{H} px"):
         ingest([tmp_path / "seq"], tmp_path / "o.h5", options=IngestOptions(width_px=320))
 
 

@@ -15,14 +15,15 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.events.accumulate import counts_to_labels
-from tactile_cli.fos.actions import ACTIONS
 from tactile_cli.spatial import Roi, roi_centroid_series
 from tactile_cli.spatial.stream import centroid_features, channel_names, channel_units
 from tactile_cli.store import validate_file
 from tactile_cli.store.reader import recording_hashes
+from tactile_cli.store.trials import TactileFile
 from tactile_cli.store.writer import sha256_of
+from tactile_cli.vocabulary import ACTIONS
 
-from .conftest import OPTICS, STRIP_ROIS, make_strip_events, write_trials
+from ..factories.strip_events import OPTICS, STRIP_ROIS, make_strip_events, write_trials
 
 runner = CliRunner()
 REPO = Path(__file__).resolve().parents[2]
@@ -102,7 +103,8 @@ def test_centroids_command_writes_eq19_filled_and_labelled(sparse_file, tmp_path
             g = h5[f"trials/{trial}/signals/roi_centroids"]
             data, t_s = g["data"][()], g["t_s"][()]
             assert data.dtype == np.float32 and np.isfinite(data).all()
-            t_ref, c_ref = roi_centroid_series(sparse_file, trial, STRIP_ROIS)
+            with TactileFile(sparse_file) as tf:
+                t_ref, c_ref = roi_centroid_series(tf.trial(trial), STRIP_ROIS)
             np.testing.assert_array_equal(t_s, t_ref)
             flags = data[:, 2 * n:3 * n].astype(bool)
             np.testing.assert_array_equal(flags, np.isfinite(c_ref[..., 0]))

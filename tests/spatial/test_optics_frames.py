@@ -13,8 +13,9 @@ from tactile_cli.spatial import (
     iter_trial_frames,
     median_filter_frames,
 )
+from tactile_cli.store.trials import TactileFile
 
-from .conftest import H, W, make_strip_events, write_trials
+from ..factories.strip_events import H, W, make_strip_events, write_trials
 
 
 # -- optics ---------------------------------------------------------------------------------
@@ -89,7 +90,9 @@ def test_trial_frames_use_the_trial_origin(tmp_path):
     tr = make_strip_events(end_s=0.6, press_s=(0.1, 0.2), slip_s=(0.2, 0.5),
                            origin_us=3_000_000, seed=4)
     f = write_trials(tmp_path / "f.h5", {"t": tr})
-    batches = list(iter_trial_frames(f, "t", window_s=0.05, start_s=0.1, end_s=0.5, batch=3))
+    with TactileFile(f) as tf:
+        batches = list(iter_trial_frames(tf.trial("t"), window_s=0.05, start_s=0.1, end_s=0.5,
+                                         batch=3))
     t_s = np.concatenate([b.t_s for b in batches])
     np.testing.assert_allclose(t_s, 0.1 + 0.05 * np.arange(8))
     pos = np.concatenate([b.positive for b in batches])
@@ -102,8 +105,6 @@ def test_trial_frames_use_the_trial_origin(tmp_path):
 
 
 def test_event_windows_match_a_binary_search_over_all_events(tmp_path):
-    from tactile_cli.spatial import TrialEvents
-
     tr = make_strip_events(end_s=0.4, press_s=(0.1, 0.2), slip_s=(0.2, 0.3),
                            origin_us=1_234_567, seed=8)
     f = write_trials(tmp_path / "f.h5", {"t": tr})
@@ -111,7 +112,8 @@ def test_event_windows_match_a_binary_search_over_all_events(tmp_path):
     bounds = np.concatenate([[tr.t[0], tr.t[-1], tr.t[-1] + 1, tr.t[0] - 5_000, 0],
                              rng.integers(tr.t[0] - 2_000, tr.t[-1] + 2_000, 60),
                              tr.t[rng.integers(0, tr.t.size, 30)]])
-    with TrialEvents(f, "t") as te:
+    with TactileFile(f) as tf:
+        te = tf.trial("t").events
         assert te.origin_us == 1_234_567
         for a, b in zip(bounds[::2], bounds[1::2], strict=False):
             lo, hi = int(min(a, b)), int(max(a, b))

@@ -21,8 +21,9 @@ from tactile_cli.spatial import (
     roi_weight_sums,
 )
 from tactile_cli.spatial.roi import subtract_background
+from tactile_cli.store.trials import TactileFile
 
-from .conftest import OPTICS, STRIP_ROIS, H, W, make_strip_events, write_trials
+from ..factories.strip_events import OPTICS, STRIP_ROIS, H, W, make_strip_events, write_trials
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -108,7 +109,8 @@ def test_centroid_series_shape_and_times(tmp_path):
     tr = make_strip_events(end_s=1.0, press_s=(0.1, 0.3), slip_s=(0.3, 0.8), seed=7,
                            origin_us=2_000_000)
     f = write_trials(tmp_path / "f.h5", {"t": tr})
-    t_s, c = roi_centroid_series(f, "t", STRIP_ROIS, 0.02)
+    with TactileFile(f) as tf:
+        t_s, c = roi_centroid_series(tf.trial("t"), STRIP_ROIS, 0.02)
     assert c.shape == (50, 3, 2) and t_s.shape == (50,)
     np.testing.assert_allclose(t_s, 0.01 + 0.02 * np.arange(50))
     # at rest in the press the band sits at y1 - 20.5 px (its pixels floor the position);
@@ -117,8 +119,9 @@ def test_centroid_series_shape_and_times(tmp_path):
     rest = c[(t_s > 0.12) & (t_s < 0.28), :, 1]
     expected = [0.977 * (r.y1 - 20.5) + 0.023 * 239.5 for r in STRIP_ROIS]
     np.testing.assert_allclose(np.nanmean(rest, axis=0), expected, atol=1.5)
-    with pytest.raises(InputError, match="no trial 'nope'; the file has 1 trial"):
-        roi_centroid_series(f, "nope", STRIP_ROIS)
+    with TactileFile(f) as tf, pytest.raises(InputError,
+                                             match="no trial 'nope'; the file has 1 trial"):
+        roi_centroid_series(tf.trial("nope"), STRIP_ROIS)
 
 
 # -- config -------------------------------------------------------------------------------

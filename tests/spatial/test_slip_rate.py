@@ -19,7 +19,7 @@ from tactile_cli.spatial import (
     slip_rate_from_centroids,
 )
 
-from .conftest import OPTICS, STRIP_ROIS, make_strip_events, write_trials
+from ..factories.strip_events import OPTICS, STRIP_ROIS, make_strip_events, write_trials
 
 runner = CliRunner()
 

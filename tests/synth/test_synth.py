@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.fos.actions import ACTIONS, expected_net_counts
+from tactile_cli.fos.actions import expected_net_counts
 from tactile_cli.store import StoreWriter, validate_file
 from tactile_cli.synth import (
     SynthConfig,
@@ -25,6 +25,7 @@ from tactile_cli.synth import (
     noisy_net_counts,
     synthesize,
 )
+from tactile_cli.vocabulary import ACTIONS
 
 REPO = Path(__file__).resolve().parents[2]
 runner = CliRunner()
@@ -262,7 +263,7 @@ def test_synthetic_trials_fit_back_to_their_parameters(tmp_path):
     from tactile_cli.fos.protocol import fit_regions
     from tactile_cli.fos.regions import read_trial_regions
 
-    from ..fos.counts_files import use_test_compilation_cache
+    from ..factories.fos_counts import use_test_compilation_cache
 
     use_test_compilation_cache()
     # press regions of 1.2-1.6 s and slips of 0.9-1.2 s: the shapes the fos tests compile
