@@ -9,7 +9,15 @@ from typing import Annotated
 
 import typer
 
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "data_name": "--data-name",
+    "metric": "--metric",
+    "margin_pp": "--margin",
+    "out_dir": "--out",
+}
 
 
 def runs_and_files(paths: list[Path] | None, data: list[Path] | None) -> tuple[list[Path],
@@ -62,6 +70,8 @@ def compare_command(
 
         cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric)
         files = write_comparison(cmp, out) if out is not None else None
+        for note in cmp.notes:
+            print(f"tactile: warning: {note}", file=sys.stderr)
         if as_json:
             typer.echo(dumps(comparison_record(cmp)))
             return
@@ -85,4 +95,4 @@ def compare_command(
         if files is not None:
             typer.echo(f"wrote {files.png}, {files.csv.name}, {files.json.name}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -9,8 +9,15 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .train import data_files
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "data_paths": "--data FILE",
+    "split": "--split",
+    "threshold": "--threshold",
+}
 
 
 def evaluate_command(
@@ -81,7 +88,7 @@ def evaluate_command(
 
                 perturbed = perturb_and_print([run], files, kinds=perturb_kinds,
                                               threshold=threshold, split=split, name=name,
-                                              echo=False)
+                                              echo=False, notes=False)
                 payload = {"evaluation": payload, "perturbation": perturbed[0].as_dict()}
             typer.echo(dumps(payload))
         else:
@@ -121,10 +128,12 @@ def evaluate_command(
                 from .perturb import perturb_and_print
 
                 perturb_and_print([run], files, kinds=perturb_kinds, threshold=threshold,
-                                  split=split, name=name)
+                                  split=split, name=name, notes=False)
+        for note in result.notes:
+            print(f"tactile: warning: {note}", file=sys.stderr)
         if result.overlaps_training and split == "all":
             print(f"tactile: warning: {', '.join(result.overlaps_training)} was used to train "
                   "this run; these metrics include training trials (use --split test)",
                   file=sys.stderr)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -13,8 +13,16 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .compare import runs_and_files
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "data_paths": "--data FILE",
+    "split": "--split",
+    "threshold": "--threshold",
+    "out_dir": "--out",
+}
 
 
 def parse_threshold(text: str) -> tuple[float | None, float]:
@@ -64,10 +72,12 @@ def perturb_and_print(
     out: Path | None = None,
     as_json: bool = False,
     echo: bool = True,
+    notes: bool = True,
 ) -> list[Any]:
     """Run :func:`tactile_cli.learn.perturb.perturb_evaluate` for every run (each writes
     RUN/perturb/<name>/), write the combined chart to ``out`` when given, print a table
-    (or the JSON) when ``echo``, and return the results. For use inside ``run_guarded``."""
+    (or the JSON) when ``echo`` and the results' notes on stderr when ``notes``, and return
+    the results. For use inside ``run_guarded``."""
     from rich.console import Console
     from rich.table import Table
 
@@ -96,6 +106,10 @@ def perturb_and_print(
             run, files, kind_list, level_map, absolute, relative_threshold=relative,
             split=split, seed=seed, name=name, on_level=on_level))  # type: ignore[arg-type]
     written = write_perturbation_set(results, out) if out is not None else None
+    if notes:
+        for r in results:
+            for note in r.notes:
+                print(f"tactile: warning: {note}", file=sys.stderr)
     if not echo:
         return results
     if as_json:
@@ -177,4 +191,4 @@ def perturb_command(
         perturb_and_print(run_dirs, files, kinds=kinds, levels=levels, threshold=threshold,
                           split=split, seed=seed, name=name, out=out, as_json=as_json)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -4,7 +4,11 @@ Issue 4, item 5. Each run's ``RUN/eval/<name>/metrics.json`` (written by ``tacti
 evaluate``, see :mod:`.evaluate`) gives its score on one evaluation data set and its cost
 on this machine. The runs must have been evaluated on the same recordings (the same files
 by SHA-256, or files derived from them such as ``tactile centroids`` streams, with the same
-trials and split); :func:`compare` refuses to put other numbers side by side.
+trials and split); :func:`compare` refuses to put other numbers side by side. Each
+evaluation must also have been of data of its run's input (:mod:`.inputs`): a metrics.json
+whose recorded ``input`` has a sample period more than 0.1 % from the ``input`` of the
+run's run.json, or other channels or units, is refused; where either file predates that
+record the comparison goes ahead with a note saying what was not checked.
 
 What is compared:
 
@@ -44,6 +48,7 @@ from .._version import __version__
 from ..errors import InputError
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
+from .inputs import InputSpec, mismatch
 
 COMPARE_PNG = "compare.png"
 COMPARE_CSV = "compare.csv"
@@ -151,6 +156,7 @@ class RunPoint:
     cpu: str = ""
     pareto: bool = False
     within_margin: bool = False
+    input: dict[str, Any] | None = None  # metrics.json ``input``: the evaluation data's
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -169,6 +175,7 @@ class Comparison:
     fastest: RunPoint | None
     pareto: list[RunPoint]  # on the front, by increasing latency
     inputs: list[dict[str, Any]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def metric_label(self) -> str:
@@ -184,7 +191,7 @@ class Comparison:
             "best": self.best.label, "needed": self.needed.label,
             "fastest": None if self.fastest is None else self.fastest.label,
             "pareto": [p.label for p in self.pareto],
-            "runs": [p.as_dict() for p in self.points],
+            "runs": [p.as_dict() for p in self.points], "notes": list(self.notes),
         }
 
     def summary(self) -> str:
@@ -252,7 +259,7 @@ def choose_data_name(run_dirs: Sequence[Path], data_name: str | None) -> str:
         raise InputError(f"the runs share no evaluation ({listing}); evaluate them on the "
                          "same data with `tactile evaluate RUN --data FILE`")
     raise InputError(f"the runs share several evaluations ({', '.join(common)}); choose one "
-                     "with --data-name")
+                     "with `data_name`")
 
 
 def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
@@ -269,12 +276,12 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
         cls = metric.split(":", 1)[1]
         found = [c for c in head["per_class"] if c["name"] == cls]
         if not found:
-            raise InputError(f"--metric {metric}: head {head_name!r} has no class {cls!r} "
+            raise InputError(f"`metric={metric!r}`: head {head_name!r} has no class {cls!r} "
                              f"(classes: {', '.join(c['name'] for c in head['per_class'])})",
                              path=path)
         value = found[0]["f1"]
     else:
-        raise InputError(f"--metric must be accuracy, macro_f1 or f1:<class>, got {metric!r}")
+        raise InputError(f"`metric` must be accuracy, macro_f1 or f1:<class>, got {metric!r}")
     if value is None or not math.isfinite(value):
         raise InputError(f"{metric} is not a number in this evaluation (no windows of the "
                          "class?)", path=path)
@@ -320,6 +327,7 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
         data=[{k: d.get(k) for k in ("path", "sha256", "recordings_sha256", "n_trials")}
               for d in m.get("data", [])],
         latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
+        input=m.get("input"),
     )
 
 
@@ -348,8 +356,34 @@ def _check_same_data(points: Sequence[RunPoint]) -> None:
                 "same trials", path=p.metrics_path)
         if p.split != ref.split:
             raise InputError(f"evaluation split is {p.split!r} here but {ref.split!r} in "
-                             f"{ref.run}; evaluate every run with the same --split",
+                             f"{ref.run}; evaluate every run with the same "
+                             "`tactile evaluate --split`",
                              path=p.metrics_path)
+
+
+def _check_inputs(points: Sequence[RunPoint], infos: Sequence[dict[str, Any]]) -> list[str]:
+    """Refuse an evaluation of data other than its run's input (sample period more than
+    0.1 % off, other channels or units); return a note for each pair that could not be
+    checked because run.json or metrics.json predates the record."""
+    notes = []
+    for p, info in zip(points, infos, strict=True):
+        run_json = Path(p.run) / runs.RUN_JSON
+        trained = None if "input" not in info else InputSpec.from_dict(info["input"],
+                                                                       path=run_json)
+        data = None if p.input is None else InputSpec.from_dict(p.input, path=p.metrics_path)
+        if trained is None or data is None:
+            older, redo = ("run.json", "train") if trained is None \
+                else ("metrics.json", "evaluate")
+            notes.append(f"{p.label}: {older} records no input sample period or channels, so "
+                         f"evaluation {p.eval_name!r} was not checked to be of data like the "
+                         f"training data; re-run `tactile {redo}` to have it checked")
+            continue
+        found = mismatch(data, trained)
+        if found is not None:
+            raise InputError(f"the evaluation data's {found[0]}; re-run `tactile evaluate "
+                             f"{p.run} --data FILE` on data of the run's input, or retrain",
+                             path=p.metrics_path)
+    return notes
 
 
 def compare_points(points: Sequence[RunPoint], *, margin_pp: float = 0.5,
@@ -358,7 +392,7 @@ def compare_points(points: Sequence[RunPoint], *, margin_pp: float = 0.5,
     if not points:
         raise InputError("no runs to compare; give RUN folders")
     if not (math.isfinite(margin_pp) and margin_pp >= 0):
-        raise InputError(f"--margin must be a number >= 0 (percentage points), got {margin_pp}")
+        raise InputError(f"`margin_pp` must be a number >= 0 (percentage points), got {margin_pp}")
     score = np.array([p.score for p in points], dtype=np.float64)
     lat = np.array([math.nan if p.latency_ms is None else p.latency_ms for p in points])
     n_params = np.array([p.n_params for p in points], dtype=np.int64)
@@ -392,7 +426,7 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
             raise InputError("run given twice", path=d)
         seen.add(d.resolve())
     name = choose_data_name(dirs, data_name)
-    families = []
+    families, infos = [], []
     for d in dirs:
         try:
             info = json.loads((d / runs.RUN_JSON).read_text(encoding="utf-8"))
@@ -400,10 +434,13 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
             raise InputError(f"run.json is not valid JSON ({exc})",
                              path=d / runs.RUN_JSON) from None
         families.append(str(info.get("model", {}).get("family", "?")))
+        infos.append(info)
     labels = run_labels(dirs, families)
     points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
     _check_same_data(points)
+    notes = _check_inputs(points, infos)
     cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name)
+    cmp.notes = notes
     cmp.inputs = [{"path": p.metrics_path, "sha256": sha256_of(p.metrics_path)}
                   for p in points]
     return cmp
@@ -526,7 +563,7 @@ def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | Non
     atomically; compare.json is written last, so its presence means the set is complete."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise InputError("--out exists and is not a folder", path=out)
+        raise InputError("`out_dir` exists and is not a folder", path=out)
     png = write_atomic(out / COMPARE_PNG, plot_comparison(cmp))
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(TABLE_COLUMNS), lineterminator="\n")

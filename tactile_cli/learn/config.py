@@ -41,6 +41,7 @@ from pydantic import (
 
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
+from ..vocabulary import BIN_S
 
 #: Summary features of the MLP family, in the order they are computed (per channel).
 SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope")
@@ -112,7 +113,7 @@ class DataConfig(_Model):
     end, so the decision for a sample is made after that many later samples (a latency of
     ``label_delay`` samples that lets the model see a transition's first samples)."""
     targets: list[TargetConfig] = Field(min_length=1)
-    bin_s: float = Field(default=0.02, gt=0)
+    bin_s: float = Field(default=BIN_S, gt=0)
     """Bin width (s) of event counts computed on the fly from events."""
     transform: Literal["none", "signed_log1p"] = "none"
     """Applied to every sample before normalisation: ``signed_log1p`` is

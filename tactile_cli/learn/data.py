@@ -3,7 +3,8 @@
 The pipeline of ``tactile train`` and ``tactile evaluate`` (issue 4, item 2):
 
 1. :func:`read_trials` reads the configured stream of every trial (channels selected by
-   name) with its per-sample labels and trial labels. A trial with events but no
+   name) with its per-sample labels and trial labels, its sample period, channel names
+   and units (the run's input, checked by :mod:`.inputs`). A trial with events but no
    ``event_counts`` stream is counted on the fly (contract 2:
    :func:`tactile_cli.events.accumulate.trial_counts`) and labelled per bin from its
    annotations (:func:`~tactile_cli.events.accumulate.counts_to_labels`).
@@ -33,16 +34,16 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from ..errors import InputError
-from ..store.reader import attr_value, open_tactile
+from ..store.trials import TactileFile, Trial
 from .config import SUMMARY_FEATURES, DataConfig, SplitConfig, TargetConfig
 from .heads import HeadSpec
 
@@ -59,6 +60,10 @@ class TrialSeries:
     float64 for numeric labels). classes: name -> class names of categorical labels.
     trial_labels: the trial's ``labels`` attributes. split_attr: its ``split`` attribute.
     origin: ``"signal"`` (a stored stream) or ``"events"`` (counted on the fly).
+    sensor: the stream's sensor. sample_period_s: seconds between samples (see
+    :func:`_sample_period_s`; the bin width for counts from events; NaN when unknown).
+    channel_names, channel_units: of the columns of ``x`` (units as recorded in
+    ``/sensors/<sensor>/channel_units``, ``""`` where there are none).
     """
 
     file: str
@@ -70,6 +75,10 @@ class TrialSeries:
     classes: dict[str, tuple[str, ...] | None] = field(default_factory=dict)
     trial_labels: dict[str, Any] = field(default_factory=dict)
     origin: str = "signal"
+    sensor: str = ""
+    sample_period_s: float = math.nan
+    channel_names: tuple[str, ...] = ()
+    channel_units: tuple[str, ...] = ()
 
     @property
     def key(self) -> str:
@@ -82,19 +91,22 @@ def data_files(data_paths: Sequence[str | Path]) -> list[Path]:
     """The ``--data`` files as paths; InputError when none is given or one is missing."""
     paths = [Path(p) for p in data_paths]
     if not paths:
-        raise InputError("no data files; give --data FILE")
+        raise InputError("no data files; give `data_paths`")
     for p in paths:
         if not p.is_file():
             raise InputError("data file not found", path=p)
     return paths
 
 
-def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeries]:
+def read_trials(paths: Sequence[str | Path], data: DataConfig, *, trained: bool = False
+                ) -> list[TrialSeries]:
     """Every trial of the given files, with the configured stream, channels and the
     sample labels the config's targets need.
 
     Raises :class:`InputError` naming the file and HDF5 path when a trial lacks the
-    stream, a channel or a label (it lists what is there).
+    stream, a channel or a label (it lists what is there). ``trained``: the data are read
+    for a trained run (``data`` is its config), so a missing channel is reported against
+    the run's channels rather than as a config to fix.
     """
     sample_targets = [t.name for t in data.targets if t.source == "sample"]
     trials: list[TrialSeries] = []
@@ -102,75 +114,68 @@ def read_trials(paths: Sequence[str | Path], data: DataConfig) -> list[TrialSeri
         path = Path(path)
         if not path.exists():
             raise InputError("data file not found", path=path)
-        with open_tactile(path) as h5:
-            if "trials" not in h5 or len(h5["trials"]) == 0:
+        with TactileFile(path) as f:
+            if not f.trial_names:
                 raise InputError("the file has no trials", path=path)
-            for name, group in h5["trials"].items():
-                trials.append(_read_trial(path, h5, name, group, data, sample_targets))
+            for trial in f:
+                trials.append(_read_trial(trial, data, sample_targets, trained))
     return trials
 
 
-def _read_trial(path: Path, h5: h5py.File, name: str, group: h5py.Group, data: DataConfig,
-                sample_targets: list[str]) -> TrialSeries:
-    split_attr = str(attr_value(group.attrs.get("split", "")))
-    trial_labels = {k: attr_value(v) for k, v in group["labels"].attrs.items()} \
-        if "labels" in group else {}
-    signals = group.get("signals")
-    where = f"/trials/{name}"
-    if signals is not None and data.stream in signals:
-        stream = signals[data.stream]
-        sensor = str(attr_value(stream.attrs["sensor"]))
-        sensor_group = h5["sensors"].get(sensor)
-        if sensor_group is None or "channel_names" not in sensor_group:
-            raise InputError(f"sensor {sensor!r} has no channel_names; channels cannot be "
-                             "selected by name", path=path, where=f"/sensors/{sensor}")
-        names = list(sensor_group["channel_names"].asstr()[()])
-        columns = []
+def _read_trial(trial: Trial, data: DataConfig, sample_targets: list[str], trained: bool
+                ) -> TrialSeries:
+    path = trial.path
+    if trial.has_signal(data.stream):
+        where = f"{trial.where}/signals/{data.stream}"
+        sensor = trial.signal_sensor(data.stream)
+        if not sensor.channel_names:
+            raise InputError(f"sensor {sensor.name!r} has no channel_names; channels cannot "
+                             "be selected by name", path=path, where=f"/sensors/{sensor.name}")
         for ch in data.channels:
-            if ch not in names:
-                raise InputError(f"channel {ch!r} is not a channel of sensor {sensor!r} "
-                                 f"(channels: {', '.join(names)}); fix data.channels",
-                                 path=path, where=f"{where}/signals/{data.stream}")
-            columns.append(names.index(ch))
-        raw = stream["data"][()]
-        x = np.ascontiguousarray(raw[:, columns], dtype=np.float32)
-        t_s = stream["t_s"][()].astype(np.float64)
+            if ch not in sensor.channel_names:
+                todo = (f"the run was trained on channels [{', '.join(data.channels)}]; rename "
+                        "the data's channels to the run's or retrain on it") if trained \
+                    else "fix data.channels"
+                raise InputError(f"channel {ch!r} is not a channel of sensor {sensor.name!r} "
+                                 f"(channels: {', '.join(sensor.channel_names)}); {todo}",
+                                 path=path, where=where)
+        signal = trial.signal(data.stream, channels=data.channels)
         labels: dict[str, np.ndarray] = {}
         classes: dict[str, tuple[str, ...] | None] = {}
-        available = list(stream["sample_labels"].keys()) if "sample_labels" in stream else []
+        available = list(signal.sample_labels)
         for label in sample_targets:
             if label not in available:
                 raise InputError(
                     f"no per-sample label {label!r} (labels: {', '.join(available) or 'none'}); "
                     "fix data.targets or use `source: trial` for a trial label",
-                    path=path, where=f"{where}/signals/{data.stream}/sample_labels")
-            ds = stream["sample_labels"][label]
-            values = ds[()]
-            if "classes" in ds.attrs:
-                classes[label] = tuple(str(attr_value(c)) for c in ds.attrs["classes"])
-                labels[label] = values.astype(np.int64)
-            else:
-                classes[label] = None
-                labels[label] = values.astype(np.int64) if values.dtype.kind in "iub" \
-                    else values.astype(np.float64)
-        return TrialSeries(str(path), name, split_attr, x, t_s, labels, classes, trial_labels,
-                           "signal")
-    if data.stream == "event_counts" and "events" in group:
-        return _count_events(path, name, split_attr, trial_labels, data, sample_targets)
-    streams = list(signals.keys()) if signals is not None else []
+                    path=path, where=f"{where}/sample_labels")
+            values = signal.sample_labels[label].values
+            label_classes = signal.sample_labels[label].classes
+            classes[label] = label_classes
+            labels[label] = values.astype(np.int64) \
+                if label_classes is not None or values.dtype.kind in "iub" \
+                else values.astype(np.float64)
+        return TrialSeries(str(path), trial.name, trial.split,
+                           np.ascontiguousarray(signal.data, dtype=np.float32), signal.t_s,
+                           labels, classes, trial.labels, "signal", sensor.name,
+                           signal.sample_period_s, tuple(data.channels), signal.channel_units)
+    if data.stream == "event_counts" and trial.has_events:
+        return _count_events(trial, data, sample_targets)
     hint = " and no events to count" if data.stream == "event_counts" else ""
     raise InputError(f"trial has no stream {data.stream!r}{hint} (streams: "
-                     f"{', '.join(streams) or 'none'}); fix data.stream", path=path, where=where)
+                     f"{', '.join(trial.signal_names) or 'none'}); fix data.stream",
+                     path=path, where=trial.where)
 
 
-def _count_events(path: Path, name: str, split_attr: str, trial_labels: dict[str, Any],
-                  data: DataConfig, sample_targets: list[str]) -> TrialSeries:
+def _count_events(trial: Trial, data: DataConfig, sample_targets: list[str]) -> TrialSeries:
     """Event counts of a trial without an ``event_counts`` stream, with action labels
     from its annotations (contract 2)."""
     from ..events import accumulate  # lazy: only event recordings need it
-    from ..fos.actions import ACTIONS
+    from ..vocabulary import ACTIONS
 
-    counts = accumulate.trial_counts(path, name, bin_s=data.bin_s)
+    path, name = trial.path, trial.name
+    counts = accumulate.trial_counts(trial, bin_s=data.bin_s)
+    annotations = trial.annotations
     stacked = {"positive": counts.positive, "negative": counts.negative, "net": counts.net}
     for ch in data.channels:
         if ch not in stacked:
@@ -185,14 +190,16 @@ def _count_events(path: Path, name: str, split_attr: str, trial_labels: dict[str
             raise InputError(f"per-sample label {label!r} is not available for event counts "
                              "computed from events (only `action`, from the annotations)",
                              path=path, where=f"/trials/{name}")
-        annotations = accumulate.read_annotations(path, name)
         if not annotations:
             raise InputError("trial has no annotations, so its bins have no action labels",
                              path=path, where=f"/trials/{name}/annotations")
         labels[label] = accumulate.counts_to_labels(counts.t_s, annotations).astype(np.int64)
         classes[label] = tuple(ACTIONS)
-    return TrialSeries(str(path), name, split_attr, x, counts.t_s.astype(np.float64), labels,
-                       classes, trial_labels, "events")
+    # the units of the event-count streams that `tactile accumulate` writes
+    return TrialSeries(str(path), name, trial.split, x, counts.t_s.astype(np.float64), labels,
+                       classes, trial.labels, "events", trial.events.sensor_name,
+                       float(counts.bin_s), tuple(data.channels),
+                       ("events/bin",) * len(data.channels))
 
 
 # -- heads and targets -----------------------------------------------------------------------

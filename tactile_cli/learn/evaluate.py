@@ -9,10 +9,14 @@ every regression head: MAE and RMSE in the label's own units. Cost on this machi
 latency per window at batch 1 (median, 95th percentile), windows per second at a large
 batch, parameter count and model size.
 
+The data must be data of the run's input (:mod:`.inputs`): the same sample period within
+0.1 %, channels and units, else an error; a run whose run.json predates that record is
+evaluated with a note saying the period was not checked.
+
 Results go to ``RUN/eval/<name>/`` (see :mod:`.runs`): ``metrics.json`` (format
 ``tactile-eval`` 1; the fields later commands read: ``accuracy``, ``heads``,
-``latency``, ``model``), a PNG and a JSON confusion matrix per classification head and
-``predictions.csv`` (one row per window).
+``latency``, ``model``, ``input``), a PNG and a JSON confusion matrix per classification
+head and ``predictions.csv`` (one row per window).
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ from .data import (
 )
 from .figures import plot_confusion
 from .heads import HeadSpec
+from .inputs import checked_input, input_record
 from .latency import LatencyStats, measure_latency
 from .models import count_parameters, state_size_bytes
 from .train import predict
@@ -153,6 +158,10 @@ class EvalResult:
     command: str = ""
     created_utc: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    input: dict[str, Any] | None = None
+    """The data's stream, sample period, channels and units, and whether they were checked
+    against the run's (:func:`.inputs.input_record`)."""
+    notes: list[str] = field(default_factory=list)
 
     @property
     def accuracy(self) -> float | None:
@@ -177,6 +186,7 @@ class EvalResult:
             "latency": None if self.latency is None else self.latency.as_dict(),
             "model": {"n_params": self.n_params, "size_mb": self.size_mb,
                       "file_size_bytes": self.file_size_bytes},
+            "input": self.input, "notes": list(self.notes),
             **self.extra,
         }
 
@@ -222,14 +232,16 @@ def evaluate(
     ``split="test"`` keeps the trials the run's split rule (the same config and seed)
     assigns to test, which on the training files are exactly the training's test trials;
     ``"all"`` uses every trial. ``threads`` (default 1) is the torch thread count of the
-    latency measurement.
+    latency measurement. Data of another sample period (more than 0.1 %), other channels
+    or units than the run was trained on are refused (:func:`.inputs.check_input`).
     """
     run = runs.load_run(run_dir)
     paths = data_files(data_paths)
     if split not in ("all", "test"):
-        raise InputError(f"--split must be all or test, got {split!r}")
+        raise InputError(f"`split` must be all or test, got {split!r}")
     cfg = run.config
-    trials = read_trials(paths, cfg.data)
+    trials = read_trials(paths, cfg.data, trained=True)
+    spec, notes = checked_input(trials, cfg.data.stream, run.input, run.path)
     check_heads_match(run.heads, trials)
     if split == "test":
         assignment = assign_splits(trials, cfg.data.split, cfg.seed)
@@ -237,7 +249,7 @@ def evaluate(
         if not trials:
             raise InputError("no trial of these files is in the test split (the run's config "
                              f"has test_fraction {cfg.data.split.test_fraction}); use "
-                             "--split all for data the run never saw")
+                             "`split='all'` for data the run never saw")
     ws = make_windows(trials, cfg.data, run.heads, run.normalisation)
     if len(ws) == 0:
         raise InputError(f"the data give no windows (window {cfg.data.window} samples); "
@@ -267,7 +279,7 @@ def evaluate(
         n_params=count_parameters(model), size_mb=state_size_bytes(model) / 1e6,
         file_size_bytes=(run.path / runs.MODEL_PT).stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
-        created_utc=utc_now(),
+        created_utc=utc_now(), input=input_record(spec, run.input), notes=notes,
     )
     _write(result, run.heads, ws, decoded, run.normalisation.targets)
     return result

@@ -34,7 +34,8 @@ normalisation), each with an explicit seed; the same seed gives the same copy:
 
 :func:`perturb_evaluate` re-runs the run's evaluation pipeline (the functions of
 :mod:`.data`, :func:`.train.predict` and :func:`.evaluate.head_metrics`, as ``tactile
-evaluate`` does) on perturbed copies held in memory (no data file is written), gives
+evaluate`` does, refusing data of another sample period, channels or units than the
+run's: :mod:`.inputs`) on perturbed copies held in memory (no data file is written), gives
 the primary head's accuracy at every level and the breaking point: walking from the clean
 data towards more severe levels, the first level where the accuracy falls below the
 threshold (default 0.9 x the clean accuracy). Time scaling has two directions (faster and
@@ -305,6 +306,9 @@ class PerturbResult:
     tool_version: str = __version__
     wall_time_s: float = 0.0
     notes: list[str] = field(default_factory=list)
+    input: dict[str, Any] | None = None
+    """The data's stream, sample period, channels and units, and whether they were checked
+    against the run's (:func:`.inputs.input_record`; None in files written before)."""
 
     @property
     def clean_below_threshold(self) -> bool:
@@ -514,14 +518,15 @@ def perturb_evaluate(
 
     from .data import assign_splits, check_heads_match, data_files, read_trials
     from .heads import primary_head
+    from .inputs import checked_input, input_record
 
     t_start = time.perf_counter()
     run_obj = run if isinstance(run, runs.Run) else runs.load_run(run)
     paths = data_files(data_paths)
     if split not in ("all", "test"):
-        raise InputError(f"--split must be all or test, got {split!r}")
+        raise InputError(f"`split` must be all or test, got {split!r}")
     if threshold is not None and not 0 <= threshold <= 1:
-        raise InputError(f"--threshold must be an accuracy in [0, 1], got {threshold}")
+        raise InputError(f"`threshold` must be an accuracy in [0, 1], got {threshold}")
     if not 0 < relative_threshold <= 1:
         raise InputError(f"relative threshold must be in (0, 1], got {relative_threshold}")
     cfg = run_obj.config
@@ -541,13 +546,14 @@ def perturb_evaluate(
         given = user_levels.get(k, user_levels.get("drop") if k.startswith("drop_") else None)
         plan[k] = _check_levels(k, DEFAULT_LEVELS[k] if given is None else given)
 
-    trials = read_trials(paths, cfg.data)
+    trials = read_trials(paths, cfg.data, trained=True)
+    spec, input_notes = checked_input(trials, cfg.data.stream, run_obj.input, run_obj.path)
     check_heads_match(run_obj.heads, trials)
     if split == "test":
         assignment = assign_splits(trials, cfg.data.split, cfg.seed)
         trials = [trials[i] for i in assignment.indices("test")]
         if not trials:
-            raise InputError("no trial of these files is in the test split; use --split all "
+            raise InputError("no trial of these files is in the test split; use `split='all'` "
                              "for data the run never saw")
     pipe = _Pipeline(run_obj, run_obj.load_model())
     clean_acc, clean_f1, clean_n = pipe.score(trials)
@@ -555,9 +561,9 @@ def perturb_evaluate(
         raise InputError(f"the data give no windows (window {cfg.data.window} samples)")
     rates = {round(_sample_rate(t.t_s), 9) for t in trials if t.t_s.shape[0] > 1}
     fs = rates.pop() if len(rates) == 1 else None
-    notes = [] if fs is not None or "lowpass" not in plan else [
+    notes = input_notes + ([] if fs is not None or "lowpass" not in plan else [
         "trials have different sample rates: low-pass cut-offs are fractions of each "
-        "trial's Nyquist frequency"]
+        "trial's Nyquist frequency"])
     thr = threshold if threshold is not None else relative_threshold * clean_acc
     rule = (f"absolute {threshold:g}" if threshold is not None
             else f"{relative_threshold:g} x clean accuracy")
@@ -598,6 +604,7 @@ def perturb_evaluate(
         threshold_rule=rule, seed=int(seed), kinds=results, sample_rate_hz=fs,
         command=command if command is not None else current_command(),
         created_utc=utc_now(), wall_time_s=time.perf_counter() - t_start, notes=notes,
+        input=input_record(spec, run_obj.input),
     )
     if write:
         out_dir = run_obj.path / PERTURB_DIR / out_name
@@ -670,7 +677,7 @@ def write_perturbation_set(results: Sequence[PerturbResult], out_dir: str | Path
 
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise InputError("--out exists and is not a folder", path=out)
+        raise InputError("`out_dir` exists and is not a folder", path=out)
     png = write_atomic(out / PERTURB_PNG, plot_perturbations(results))
     csv_path = write_atomic(out / PERTURB_CSV, _csv_text(perturbation_rows(results)))
     record = {

@@ -163,6 +163,7 @@ def _comparison_sections(run_dirs: Sequence[Path], margin_pp: float, metric: str
             notes.append(msg)
             parts.append(f"<h3>{_e(name)}</h3><p class='note'>{_e(msg)}</p>")
             continue
+        notes.extend(cmp.notes)
         done.append(name)
         rows, classes = [], []
         for row in table_rows(cmp):
@@ -268,6 +269,7 @@ def _eval_section(d: Path, name: str, inputs: _Inputs) -> str:
     if m.get("overlaps_training") and m.get("split") == "all":
         out.append(f"<p class='note'>{_e(', '.join(m['overlaps_training']))} was used to "
                    "train this run: these metrics include training trials.</p>")
+    out += [f"<p class='note'>{_e(n)}</p>" for n in m.get("notes") or []]
     for head in m.get("heads", {}).values():
         if head.get("kind") == "classification":
             rows = [(c["name"], f"{c['precision']:.5f}", f"{c['recall']:.5f}", f"{c['f1']:.5f}",
@@ -407,16 +409,16 @@ def build_report(
     datas = [Path(p) for p in data_paths]
     figs = [Path(p) for p in figure_dirs]
     if not dirs and not datas and not figs:
-        raise InputError("nothing to report; give RUN folders, --data FILE or --figures DIR")
+        raise InputError("nothing to report; give `run_dirs`, `data_paths` or `figure_dirs`")
     for p in datas:
         if not p.is_file():
             raise InputError("data file not found", path=p)
     for p in figs:
         if not p.is_dir():
-            raise InputError("figure folder not found (--figures takes a folder)", path=p)
+            raise InputError("figure folder not found (`figure_dirs` takes folders)", path=p)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise InputError("--out exists and is not a folder", path=out)
+        raise InputError("`out_dir` exists and is not a folder", path=out)
 
     inputs = _Inputs()
     notes: list[str] = []

@@ -6,7 +6,9 @@ A run folder (format ``tactile-run`` version 1)::
       run.json               format, versions (tactile, torch, numpy, python), command,
                              config file, data files with SHA-256, seed, heads, class
                              weights, split counts, training summary (epochs, best epoch,
-                             wall time, threads), model (family, parameters, size)
+                             wall time, threads), model (family, parameters, size), input
+                             (stream, sensor, sample period and rate, channels, units:
+                             see inputs.py; absent in runs trained before issue 10)
       config.resolved.yaml   the validated config with every default filled in
       model.pt               torch.save(state_dict); load with torch.load(weights_only=True)
       normalisation.json     per-channel mean/std (training split only), regression-target
@@ -40,6 +42,7 @@ from ..errors import InputError
 from .config import TrainConfig, parse_config
 from .data import Normalisation
 from .heads import HeadSpec
+from .inputs import InputSpec
 from .models import MultiTaskNet, build_model
 
 RUN_FORMAT = "tactile-run"
@@ -65,7 +68,7 @@ def write_folder(out: Path, fill: Callable[[Path], None], *, overwrite: bool) ->
     ``overwrite``; otherwise that is an error raised before anything is written)."""
     out = Path(out)
     if out.exists() and not overwrite:
-        raise InputError("output folder exists; pass --overwrite to replace it", path=out)
+        raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
     if out.exists() and not out.is_dir():
         raise InputError("output exists and is not a folder", path=out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -125,13 +128,15 @@ def write_json(path: Path, obj: Any) -> None:
 
 @dataclass
 class Run:
-    """A trained run read back from its folder."""
+    """A trained run read back from its folder. ``input``: the stream, sample period,
+    channels and units it was trained on (None for runs whose run.json predates them)."""
 
     path: Path
     info: dict[str, Any]
     config: TrainConfig
     heads: list[HeadSpec]
     normalisation: Normalisation
+    input: InputSpec | None = None
 
     def load_model(self) -> MultiTaskNet:
         """The network with its trained weights (``torch.load(weights_only=True)``), in
@@ -189,7 +194,10 @@ def load_run(path: str | Path) -> Run:
     except FileNotFoundError:
         raise InputError("run folder has no normalisation.json", path=path) from None
     heads = [HeadSpec.from_dict(h) for h in info["heads"]]
-    return Run(path, info, config, heads, norm)
+    trained = None
+    if "input" in info:
+        trained = InputSpec.from_dict(info["input"], path=info_path)
+    return Run(path, info, config, heads, norm, trained)
 
 
 def eval_dir_name(data_paths: list[Path], split: str) -> str:

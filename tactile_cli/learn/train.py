@@ -48,6 +48,7 @@ from .data import (
 )
 from .figures import plot_curves
 from .heads import HeadSpec, primary_head
+from .inputs import InputSpec, input_spec
 from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
 
 
@@ -69,13 +70,15 @@ class EpochRecord:
 
 @dataclass
 class Prepared:
-    """Trials, split, heads, normalisation and windows of one training data set."""
+    """Trials, split, heads, normalisation and windows of one training data set, and the
+    input (stream, sample period, channels, units) every trial shares."""
 
     trials: list[TrialSeries]
     assignment: SplitAssignment
     heads: list[HeadSpec]
     normalisation: Normalisation
     windows: dict[str, WindowSet]  # split -> windows
+    input: InputSpec
 
 
 @dataclass
@@ -122,9 +125,11 @@ def deterministic(seed: int, threads: int) -> Iterator[None]:
 
 
 def prepare(config: TrainConfig, data_paths: Sequence[Path]) -> Prepared:
-    """Read, split, normalise (training split only) and window the training data."""
+    """Read, split, normalise (training split only) and window the training data; every
+    trial must have the same sample period (within 0.1 %) and channel units."""
     d = config.data
     trials = read_trials(data_paths, d)
+    spec = input_spec(trials, d.stream)
     assignment = assign_splits(trials, d.split, config.seed)
     heads = resolve_heads(d.targets, trials)
     by_split = {s: [trials[i] for i in assignment.indices(s)] for s in ("train", "val", "test")}
@@ -143,7 +148,7 @@ def prepare(config: TrainConfig, data_paths: Sequence[Path]) -> Prepared:
     windows = {"train": train_ws}
     for s in ("val", "test"):
         windows[s] = make_windows(by_split[s], d, heads, norm)
-    return Prepared(trials, assignment, heads, norm, windows)
+    return Prepared(trials, assignment, heads, norm, windows, spec)
 
 
 def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
@@ -218,7 +223,7 @@ def train(
     started = time.perf_counter()
     out = Path(out)
     if out.exists() and not overwrite:
-        raise InputError("output folder exists; pass --overwrite to replace it", path=out)
+        raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
     paths = data_files(data_paths)
     opt_cfg = config.optim
     threads = opt_cfg.threads
@@ -320,6 +325,7 @@ def train(
         "data": [{"path": str(p), "sha256": sha256_of(p), "size_bytes": p.stat().st_size,
                   "n_trials": sum(1 for t in prep.trials if t.file == str(p))} for p in paths],
         "heads": [h.as_dict() for h in prep.heads],
+        "input": prep.input.as_dict(),
         "class_weights": None if weights is None else {k: v.tolist()
                                                        for k, v in weights.items()},
         "split": {"mode": prep.assignment.mode, "trials": n_trials, "windows": n_windows},

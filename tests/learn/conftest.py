@@ -8,7 +8,7 @@ import pytest
 
 from tactile_cli.learn.config import TrainConfig, parse_config
 
-from .factory import make_action_file, make_event_file
+from ..factories.action_files import make_action_file, make_event_file
 
 
 def tiny_config(**changes) -> TrainConfig:

@@ -109,7 +109,7 @@ def test_needed_ties_break_by_latency_and_exact_margin_edge_is_inside():
                        ["a", "b"]) == 1
     assert within_margin(np.array([0.999, 0.994]), 0.5).tolist() == [True, True]
     assert within_margin(np.array([0.999, 0.9939]), 0.5).tolist() == [True, False]
-    with pytest.raises(InputError, match="--margin must be a number >= 0"):
+    with pytest.raises(InputError, match="`margin_pp` must be a number >= 0"):
         compare_points([point("a/a", 0.9, 1.0, 1)], margin_pp=-1)
 
 

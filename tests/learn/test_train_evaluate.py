@@ -158,7 +158,7 @@ def test_multitask_run_reports_regression_error_in_label_units(tmp_path, action_
 
 def test_existing_run_folder_is_an_error_unless_overwrite(tiny_run, action_file):
     out, _ = tiny_run
-    with pytest.raises(InputError, match="output folder exists; pass --overwrite"):
+    with pytest.raises(InputError, match="output folder exists; pass `overwrite=True`"):
         train(tiny_config(), [action_file], out)
 
 
