@@ -3,6 +3,18 @@
 The library raises these; the CLI turns them into a one-line message on stderr and
 exit code 2 (see :mod:`tactile_cli.cli._errors`). A message names the file and, where
 it applies, the row or HDF5 path, the expected and the actual value, and what to do.
+
+A message names the arguments of the library call in backticks, as a notebook user
+writes them, and never a command-line flag of the current call::
+
+    output exists; pass `overwrite=True` to replace it
+    bin width 0.0015 ms is not a whole number of microseconds; pass e.g. `bin_s=0.02`
+    `seed` (=-1) must be a non-negative integer
+
+Each command gives :func:`tactile_cli.cli._errors.run_guarded` a table that spells those
+arguments as its flags (``--overwrite``, ``--bin-ms 20``, ``--seed (=-1)``). Another
+command to run is named whole, in backticks (``tactile ingest --annotations FILE``).
+tests/test_errors.py keeps the library free of flags.
 """
 
 from __future__ import annotations

@@ -1,11 +1,18 @@
-"""The one place CLI errors are printed: one line on stderr, exit code 2, no traceback."""
+"""The one place CLI errors are printed: one line on stderr, exit code 2, no traceback.
+
+Library messages name Python arguments, never flags (a notebook user reads
+``pass `overwrite=True` to replace it``); :func:`to_flags` turns those references into the
+command line's spelling (``pass --overwrite to replace it``) with a table each command
+gives :func:`run_guarded`. See :func:`to_flags` for the forms it rewrites.
+"""
 
 from __future__ import annotations
 
+import re
 import signal
 import sys
-from collections.abc import Callable
-from typing import NoReturn, TypeVar
+from collections.abc import Callable, Mapping
+from typing import NoReturn, TypeAlias, TypeVar
 
 from .. import interrupt
 from ..errors import TactileError
@@ -16,6 +23,65 @@ T = TypeVar("T")
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
+
+
+#: How a command line spells a library argument: the flag (``"--overwrite"``), or the flag
+#: and a function that turns the Python value's text into the flag's (seconds to ms).
+Flag: TypeAlias = str | tuple[str, Callable[[str], str]]
+
+#: Arguments every command spells the same way; a command's own table is added to these.
+COMMON_FLAGS: dict[str, Flag] = {"overwrite": "--overwrite"}
+
+_REFERENCE = re.compile(
+    r"`(?P<name>[A-Za-z_]\w*)(?:=(?P<value>[^`]+))?`(?P<shown> \(=(?P<shown_value>[^()]*)\))?"
+)
+
+
+def seconds_as_ms(value: str) -> str:
+    """``"0.02"`` -> ``"20"``: a value in seconds as a ``--...-ms`` flag takes it."""
+    return f"{float(value) * 1e3:g}"
+
+
+def _unquoted(value: str) -> str:
+    if len(value) >= 2 and value[0] == value[-1] and value[0] in "'\"":
+        return value[1:-1]
+    return value
+
+
+def to_flags(message: str, flags: Mapping[str, Flag]) -> str:
+    """``message`` with its references to the arguments in ``flags`` spelt as flags.
+
+    A library message names an argument in backticks, in one of these forms, each
+    rewritten when ``flags`` knows the name (other backticked words are left alone)::
+
+        `overwrite=True`        ->  --overwrite           a switch
+        `bin_s=0.02`            ->  --bin-ms 20           the value converted by the table
+        `regions='detect'`      ->  --regions detect      Python string quotes dropped
+        `seed`, `seed` (=-1)    ->  --seed, --seed (=-1)  a shown value converted too
+    """
+
+    def spell(m: re.Match[str]) -> str:
+        flag = flags.get(m["name"])
+        if flag is None:
+            return m[0]
+        name, convert = (flag, None) if isinstance(flag, str) else flag
+
+        def value(text: str) -> str:
+            text = _unquoted(text)
+            if convert is None:
+                return text
+            try:
+                return convert(text)
+            except ValueError:  # not a number after all: show it as the library wrote it
+                return text
+
+        out = name if m["value"] in (None, "True") else f"{name} {value(m['value'])}"
+        if m["shown"] is not None:
+            shown = m["shown_value"] if convert is None else value(m["shown_value"])
+            out += f" (={shown})"
+        return out
+
+    return _REFERENCE.sub(spell, message)
 
 
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
@@ -32,9 +98,19 @@ def _on_signal(signum, frame) -> None:  # noqa: ARG001
     interrupt.request()
 
 
-def run_guarded(func: Callable[[], T]) -> T:
+def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = None) -> T:
     """Run a command body: library errors become one-line messages with exit code 2;
-    Ctrl-C and SIGTERM unwind (temporary files are removed) and exit 130."""
+    Ctrl-C and SIGTERM unwind (temporary files are removed) and exit 130.
+
+    ``flags`` maps the library arguments this command's errors can name to its flags
+    (``{"bin_s": ("--bin-ms", seconds_as_ms)}``), on top of :data:`COMMON_FLAGS`; the
+    message is printed through :func:`to_flags`, so the library says ``overwrite=True`` and
+    the command line ``--overwrite``. Each command module keeps its table in ``FLAGS``
+    (tests/cli/test_errors.py checks that every flag there is an option of the command).
+    An argument missing from the table is printed as the library wrote it (a Python name
+    in backticks): less familiar on the command line, never wrong.
+    """
+    table = {**COMMON_FLAGS, **(flags or {})}
     # SIGINT too: a KeyboardInterrupt that surfaced during interpreter shutdown would make
     # CPython exit by SIGINT instead of with code 130
     previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -43,7 +119,7 @@ def run_guarded(func: Callable[[], T]) -> T:
         return func()
     except TactileError as exc:
         remove_live_temporaries()
-        fail(str(exc))
+        fail(to_flags(str(exc), table))
     except (KeyboardInterrupt, Interrupted):
         remove_live_temporaries()
         fail("interrupted; no output was written and earlier outputs are intact", EXIT_INTERRUPTED)

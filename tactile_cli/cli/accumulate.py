@@ -13,8 +13,15 @@ from rich.console import Console
 from rich.table import Table
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ..vocabulary import BIN_S
+from ._errors import Flag, run_guarded, seconds_as_ms
 from .progress import RichProgress
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "bin_s": ("--bin-ms", seconds_as_ms),
+    "smooth_bins": "--smooth",
+}
 
 
 def _fmt_s(value: float | None) -> str:
@@ -32,7 +39,7 @@ def accumulate_command(
     ] = None,
     bin_ms: Annotated[
         float, typer.Option("--bin-ms", min=0.001, help="Bin width in ms (paper: 20).")
-    ] = 20.0,
+    ] = BIN_S * 1000,
     smooth: Annotated[
         int, typer.Option("--smooth", min=1, help="Moving-average window in bins (odd).")
     ] = 5,
@@ -147,4 +154,4 @@ def accumulate_command(
         if plot is not None:
             console.print(f"wrote {len(run.trials)} figure(s) to {plot}", highlight=False)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

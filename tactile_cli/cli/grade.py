@@ -22,7 +22,12 @@ from ..grade import (
     save_config,
     true_grade_index,
 )
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "label_key": "--label-key",
+}
 
 
 def _fmt(v: float | None, spec: str = ".4f") -> str:
@@ -92,7 +97,7 @@ def grade_command(
         _print(report, cfg, config_path if not calibrate else out, calib, plots,
                multi_file=len({str(f) for f in files}) > 1)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)
 
 
 def _calibrate(cfg, config_path, areas, label_key, overlap, out):

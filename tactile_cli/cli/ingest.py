@@ -9,8 +9,19 @@ import typer
 
 from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
 from ..store.writer import Compression
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .progress import RichProgress
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "format": "--format",
+    "mapping": "--mapping",
+    "labels": "--label",
+    "width_px": "--width",
+    "height_px": "--height",
+    "annotations": "--annotations",
+    "trial_labels": "--trial-labels",
+}
 
 
 def ingest_command(
@@ -107,4 +118,4 @@ def ingest_command(
             )
         typer.echo(f"wrote {path}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

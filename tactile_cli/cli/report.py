@@ -8,8 +8,18 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .compare import runs_and_files
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "run_dirs": "RUN folders",
+    "data_paths": "--data FILE",
+    "figure_dirs": "--figures DIR",
+    "out_dir": "--out",
+    "metric": "--metric",
+    "margin_pp": "--margin",
+}
 
 
 def report_command(
@@ -62,4 +72,4 @@ def report_command(
                               title=title, margin_pp=margin, metric=metric)
         typer.echo(str(result.index))
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -9,8 +9,13 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .progress import RichProgress
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "seed": "--seed",
+}
 
 app = typer.Typer(
     name="simulate",
@@ -106,4 +111,4 @@ def marker_events_command(
                       f"{summary['duration_s']:.2f}", f"{summary['elapsed_s']:.2f}")
         Console(width=120).print(table)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

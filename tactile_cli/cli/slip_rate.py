@@ -10,7 +10,11 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded, to_flags
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``):
+#: the library takes the ROIs and optics as ``config``, this command as the --rois file.
+FLAGS: dict[str, Flag] = {"config": "--rois"}
 
 
 def _fmt(value: float | None, scale: float = 1.0, digits: int = 4) -> str:
@@ -90,7 +94,7 @@ def slip_rate_command(
             err = r["speed_rel_error"]
             table.add_row(
                 r["trial"], r["status"] if r["status"] == "ok" else
-                f"{r['status']}: {r['message']}",
+                f"{r['status']}: {to_flags(r['message'], FLAGS)}",
                 _fmt(r["speed_m_s"], digits=6), _fmt(r["speed_se_m_s"], digits=6),
                 _fmt(r["displacement_m"], digits=6), _fmt(r["displacement_se_m"], digits=6),
                 _fmt(r["truth_speed_m_s"], digits=6),
@@ -106,4 +110,4 @@ def slip_rate_command(
         if plot is not None:
             console.print(f"wrote {plot}/slip_*.png and {plot / 'slip_rate.json'}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -8,8 +8,14 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .progress import RichProgress
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "centroids": "--centroids",
+    "seed": "--seed",
+}
 
 
 def synth_command(
@@ -57,4 +63,4 @@ def synth_command(
         extra = "" if centroids is None else f", ROI centroids from {centroids}"
         typer.echo(f"wrote {result.path}: {result.n} trials, parameters from {source}{extra}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

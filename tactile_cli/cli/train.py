@@ -11,7 +11,12 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {
+    "data_paths": "--data FILE",
+}
 
 
 def data_files(data: list[Path] | None, ctx: typer.Context) -> list[Path]:
@@ -110,4 +115,4 @@ def train_command(
             + ("" if math.isnan(acc) else f", val accuracy {100 * acc:.2f} %")
             + f", trained in {result.train_time_s:.1f} s on {result.threads} thread(s)")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

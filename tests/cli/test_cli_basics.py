@@ -1,11 +1,14 @@
-"""`tactile --help`, `--version`, `info` and `validate` through the CLI."""
+"""`--help` of every command, `--version`, `info` and `validate` through the CLI."""
 
 from __future__ import annotations
 
 import json
+import re
 
 import h5py
 import numpy as np
+import pytest
+import typer
 from typer.testing import CliRunner
 
 from tactile_cli import __version__
@@ -28,19 +31,53 @@ def _file(path):
     return path
 
 
+def _commands(group, path=()):
+    """(argv path, command) of every command and sub-command under a click group."""
+    for name, command in sorted(group.commands.items()):
+        yield (*path, name), command
+        if hasattr(command, "commands"):
+            yield from _commands(command, (*path, name))
+
+
+COMMANDS = list(_commands(typer.main.get_command(app)))
+WIDE = {"COLUMNS": "120"}  # rich wraps to the terminal and truncates long names in a narrow one
+
+
+def test_every_command_is_discovered():
+    # 18 commands and the `simulate` group with its `marker-events`
+    assert len(COMMANDS) >= 19
+    assert ("simulate", "marker-events") in [path for path, _ in COMMANDS]
+
+
 def test_help_lists_every_command_with_a_description():
-    result = runner.invoke(app, ["--help"])
-    assert result.exit_code == 0
-    for name in ("ingest", "info", "validate"):
-        assert name in result.output
-    assert "Raw recordings" in result.output
+    groups = [((), typer.main.get_command(app))] + [
+        (path, c) for path, c in COMMANDS if hasattr(c, "commands")
+    ]
+    for path, group in groups:
+        result = runner.invoke(app, [*path, "--help"], env=WIDE)
+        assert result.exit_code == 0, path
+        for name in group.commands:
+            # a row of the command table: the name, then spaces and its description
+            assert re.search(rf"^\W*{re.escape(name)}\s{{2,}}\w", result.output, re.M), (path, name)
+    assert "Raw recordings" in runner.invoke(app, ["--help"], env=WIDE).output
 
 
-def test_every_command_has_help():
-    for name in ("ingest", "info", "validate"):
-        result = runner.invoke(app, [name, "--help"])
-        assert result.exit_code == 0, name
-        assert "Usage" in result.output
+@pytest.mark.parametrize(("path", "command"), COMMANDS, ids=[" ".join(p) for p, _ in COMMANDS])
+def test_every_command_has_help(path, command):
+    result = runner.invoke(app, [*path, "--help"], env=WIDE)
+    assert result.exit_code == 0, result.output
+    assert f"Usage: tactile {' '.join(path)} " in result.output
+    flags = [
+        opt
+        for param in command.params
+        if param.param_type_name == "option"
+        for opt in (*param.opts, *param.secondary_opts)
+        if opt.startswith("--")
+    ]
+    if not hasattr(command, "commands"):
+        assert flags, f"{' '.join(path)} has no options"
+    for flag in flags:
+        assert re.search(rf"(?<![\w-]){re.escape(flag)}(?![\w-])", result.output), flag
 
 
 def test_version():
