@@ -1,6 +1,6 @@
 """Where does force grading break? Accuracy of `tactile grade` against perturbations.
 
-Trials are synthetic press regions with the marker scene's facts (tests/grade/synth.py):
+Trials are synthetic press regions with the marker scene's facts (tests/factories/press_regions.py):
 12 force levels, alpha_1 evenly over [1365, 2280] events/bin, two levels per grade, tau_1
 0.3 s, press duration T 0.4 s, press region 1.2 s, Poisson counts per polarity (positive
 1.5 net, negative 0.5 net). The grader is calibrated on a baseline training set (20 trials
@@ -53,7 +53,7 @@ from tactile_cli.grade import (  # noqa: E402
     default_config_path,
     load_config,
 )
-from tests.grade.synth import grades_of, press_areas  # noqa: E402
+from tests.factories.press_regions import grades_of, press_areas  # noqa: E402
 
 AXES = {
     "noise": [0, 25, 50, 100, 200, 400, 800, 1600],

@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from tactile_cli.fos.actions import (
-    ACTIONS,
     ActionTimeline,
     FosActionParams,
     bin_centres_s,
     expected_net_counts,
 )
 from tactile_cli.store import StoreWriter
+from tactile_cli.vocabulary import ACTIONS
 
 ALPHA_PRESS = np.linspace(1365.0, 2280.0, 12)
 GRADES = ("light", "small", "small_medium", "medium", "small_big", "big")
@@ -73,20 +73,30 @@ def action_trial(rng: np.random.Generator, *, level: int, bin_s: float = 0.02,
 
 
 def make_action_file(path: Path, *, n_trials: int = 24, seed: int = 0, bin_s: float = 0.02,
-                     splits: Sequence[str] | None = None) -> Path:
+                     splits: Sequence[str] | None = None, sample_rate_hz: float | None = None,
+                     channel_names: Sequence[str] = ("net",),
+                     channel_units: str | Sequence[str] = "events/bin") -> Path:
     """A counts file like `tactile synth` writes: ``n_trials`` trials cycling through the
-    12 force levels; ``splits`` sets each trial's split attribute."""
+    12 force levels; ``splits`` sets each trial's split attribute.
+
+    The same seed gives the same counts whatever the rest: ``sample_rate_hz`` overrides the
+    sensor's rate attribute (default ``1 / bin_s``) without changing the data;
+    ``channel_names`` names the columns (``positive`` and ``negative`` hold those counts,
+    any other name the net counts) and ``channel_units`` their units."""
     rng = np.random.default_rng(seed)
-    with StoreWriter(path, command="tests.learn.factory") as w:
-        s = w.add_sensor("event_counts", kind="event_camera", sample_rate_hz=1 / bin_s,
-                         width_px=640, height_px=480, channel_names=["net"],
-                         channel_units="events/bin", bin_s=bin_s)
+    rate = 1 / bin_s if sample_rate_hz is None else sample_rate_hz
+    with StoreWriter(path, command="tests.factories.action_files") as w:
+        s = w.add_sensor("event_counts", kind="event_camera", sample_rate_hz=rate,
+                         width_px=640, height_px=480, channel_names=list(channel_names),
+                         channel_units=channel_units, bin_s=bin_s)
         for i in range(n_trials):
             level = i % 12 + 1
             tr = action_trial(rng, level=level, bin_s=bin_s)
             trial = w.trial(f"synth_{i:04d}", split=splits[i] if splits else "",
                             labels={"force_level": level, "force_grade": GRADES[(level - 1) // 2]})
-            trial.write_signal("event_counts", sensor=s, data=tr.net[:, None].astype(np.float32),
+            columns = {"positive": tr.positive, "negative": tr.negative}
+            data = np.stack([columns.get(c, tr.net) for c in channel_names], axis=1)
+            trial.write_signal("event_counts", sensor=s, data=data.astype(np.float32),
                                t_s=tr.t_s, sample_labels={"action": (tr.labels.astype(np.int8),
                                                                      ACTIONS)})
         w.commit()
@@ -99,7 +109,7 @@ def make_event_file(path: Path, *, n_trials: int = 2, seed: int = 1, scale: floa
     gains scaled by ``scale`` to keep the files small. Returns the ground truth too."""
     rng = np.random.default_rng(seed)
     truth = []
-    with StoreWriter(path, command="tests.learn.factory") as w:
+    with StoreWriter(path, command="tests.factories.action_files") as w:
         w.add_sensor("dvs", kind="event_camera", sample_rate_hz=0, width_px=640, height_px=480)
         for i in range(n_trials):
             level = i % 12 + 1

@@ -1,4 +1,5 @@
-"""Synthetic event counts of approach-press-slip-release trials, for the segmentation tests.
+"""Synthetic event counts of approach-press-slip-release trials (segmentation, accumulation
+and grading tests).
 
 The expected net count is :func:`tactile_cli.fos.actions.expected_net_counts` (optionally
 flattened by :func:`~tactile_cli.fos.actions.saturate`); the counts per polarity are
@@ -15,13 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from tactile_cli.fos.actions import (
-    BIN_S,
     ActionTimeline,
     FosActionParams,
     bin_centres_s,
     expected_net_counts,
     saturate,
 )
+from tactile_cli.vocabulary import BIN_S
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """Tactile files of approach-press-slip-release trials with known FOS parameters, for the
-fit-fos tests.
+fit-fos tests (and :func:`use_test_compilation_cache` for the tests that run the fits).
 
 Each trial's expected net count is :func:`tactile_cli.fos.actions.expected_net_counts`;
 the counts per polarity are Poisson around it (positive events carry the positive part of
@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from tactile_cli.fos.actions import (
-    BIN_S,
     ActionTimeline,
     FosActionParams,
     bin_centres_s,
     expected_net_counts,
 )
 from tactile_cli.store import StoreWriter
+from tactile_cli.vocabulary import BIN_S
 
 
 def random_trial(
@@ -127,7 +127,7 @@ def use_test_compilation_cache() -> None:
     import os
     import tempfile
 
-    from tactile_cli.cli.fit_fos import enable_compilation_cache
+    from tactile_cli.fos.compile_cache import enable_compilation_cache
 
     os.environ["TACTILE_CACHE_DIR"] = str(Path(tempfile.gettempdir()) / "tactile-tests-cache")
     enable_compilation_cache()

@@ -1,5 +1,5 @@
-"""Factories of the spatial tests: marker-strip events with a known slip, in memory and as a
-tactile HDF5 file."""
+"""Marker-strip events with a known slip, in memory (:func:`make_strip_events`) and as a
+tactile HDF5 file (:func:`write_trials`), for the spatial tests."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from tactile_cli.spatial import Roi, StripOptics
 from tactile_cli.store import StoreWriter
@@ -112,12 +111,3 @@ def write_trials(path: Path, trials: dict[str, StripTrial], *, sensor_optics: bo
         w.commit()
     return path
 
-
-@pytest.fixture(scope="module")
-def strip_file(tmp_path_factory) -> Path:
-    """Three trials at 0.002, 0.004 (the paper's) and 0.006 m/s; one with a camera clock
-    that does not start at 0."""
-    speeds = {"slow": (0.002, 0), "paper": (0.004, 7_000_000), "fast": (0.006, 0)}
-    trials = {name: make_strip_events(slip_speed_m_s=v, origin_us=o, seed=i)
-              for i, (name, (v, o)) in enumerate(speeds.items())}
-    return write_trials(tmp_path_factory.mktemp("spatial") / "strips.h5", trials)
