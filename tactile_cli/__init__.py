@@ -5,8 +5,19 @@ The library API (importable in a notebook without the CLI)::
     import tactile_cli as tc
     tc.ingest(["rec.aedat4"], "rec.h5")
     tc.validate_file("rec.h5").ok
-    tc.summarize("rec.h5").trials
+    with tc.TactileFile("rec.h5") as f:
+        for trial in f:
+            trial.labels, trial.annotations
+
+Each chain's main verbs are here too (``tc.accumulate_file``, ``tc.fit_fos_file``,
+``tc.train``, ...); they are imported when first used, so ``import tactile_cli`` does not
+load torch or JAX.
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 from ._version import __version__ as __version__
 from .errors import InputError as InputError
@@ -15,8 +26,42 @@ from .errors import TactileError as TactileError
 from .ingest import IngestOptions as IngestOptions
 from .ingest import ingest as ingest
 from .store import StoreWriter as StoreWriter
+from .store import TactileFile as TactileFile
+from .store import Trial as Trial
+from .store import open_file as open_file
 from .store import read_events as read_events
 from .store import read_events_window as read_events_window
 from .store import read_signal as read_signal
 from .store import summarize as summarize
 from .store import validate_file as validate_file
+
+#: The main verbs of every chain and method, by the module that defines them.
+_VERBS = {
+    # the event-camera chain (paper 000)
+    "simulate_marker_events": "scene.marker_events",
+    "accumulate_file": "events.recording",
+    "estimate_slip_rates": "spatial.slip_rate",
+    "write_centroid_file": "spatial.stream",
+    "synthesize": "synth",
+    # methods any stream enters
+    "fit_fos_file": "fos.fit_file",
+    "grade_trials": "grade.grading",
+    "train": "learn.train",
+    "evaluate": "learn.evaluate",
+    "compare": "learn.compare",
+    "perturb_evaluate": "learn.perturb",
+    "build_report": "learn.report",
+    "quicklook": "plots.quicklook",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _VERBS:
+        value = getattr(importlib.import_module(f".{_VERBS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_VERBS])
