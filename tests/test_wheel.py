@@ -85,4 +85,6 @@ def test_installed_wheel_validates_a_file(tmp_path):
         cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
-    assert "valid (schema 1.0)" in result.stdout
+    from tactile_cli.store import load_spec
+
+    assert f"valid (schema {load_spec().version})" in result.stdout

@@ -11,7 +11,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
-from .trials import TactileFile, attr_value
+from .trials import TactileFile, _flat, _reading, attr_value
 from .validate import check_readable
 
 
@@ -22,8 +22,8 @@ def open_tactile(path: str | Path) -> h5py.File:
     try:
         check_readable(path)
         return h5py.File(path, "r")
-    except OSError as exc:
-        raise InputError(f"not a readable HDF5 file ({exc})", path=Path(path)) from None
+    except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"not a readable HDF5 file ({_flat(exc)})", path=Path(path)) from None
 
 
 @dataclass
@@ -80,52 +80,64 @@ class FileSummary:
 
 
 def summarize(path: str | Path) -> FileSummary:
-    """Summarise a tactile file (sensors, trials, labels, durations)."""
-    with open_tactile(path) as h5:
-        version = str(attr_value(h5.attrs.get("schema_version", "")))
-        a = h5.attrs
+    """Summarise a tactile file (sensors, trials, labels, durations).
+
+    Reads through :class:`TactileFile`, so a missing or retyped node, or a corrupt one, is
+    one :class:`InputError` naming the HDF5 path (sensor attributes are checked as every
+    command checks them)."""
+    with TactileFile(path) as f:
+        a = f.attrs
+        h5 = f._h5  # /sensors and /trials are groups (checked by TactileFile)
+        with _reading(f.path, "/provenance/sources/path"):
+            n_sources = int(h5["provenance/sources/path"].shape[0]) \
+                if "provenance/sources/path" in h5 else 0
         summary = FileSummary(
             file=str(path),
-            schema_version=version,
-            tool_version=attr_value(a.get("tool_version", "")),
-            created_utc=attr_value(a.get("created_utc", "")),
-            command=attr_value(a.get("command", "")),
-            n_sources=int(h5["provenance/sources/path"].shape[0])
-            if "provenance/sources/path" in h5
-            else 0,
+            schema_version=f.schema_version,
+            tool_version=str(a.get("tool_version", "")),
+            created_utc=str(a.get("created_utc", "")),
+            command=str(a.get("command", "")),
+            n_sources=n_sources,
         )
-        for name, g in h5["sensors"].items():
-            n_ch = int(g["channel_names"].shape[0]) if "channel_names" in g else 0
+        for name in f.sensor_names:
+            sensor = f.sensor(name)
             geometry = ""
-            if "width_px" in g.attrs:
-                geometry = f"{int(g.attrs['width_px'])}x{int(g.attrs['height_px'])} px"
-            elif "taxel_positions_m" in g:
-                geometry = f"{g['taxel_positions_m'].shape[0]} taxels"
-            units = sorted(set(g["channel_units"].asstr()[()])) if "channel_units" in g else []
+            if sensor.width_px is not None and sensor.height_px is not None:
+                geometry = f"{sensor.width_px}x{sensor.height_px} px"
+            else:
+                with _reading(f.path, f"/sensors/{name}/taxel_positions_m"):
+                    g = h5["sensors"][name]
+                    if "taxel_positions_m" in g:
+                        geometry = f"{g['taxel_positions_m'].shape[0]} taxels"
             summary.sensors.append(
-                SensorInfo(
-                    name,
-                    attr_value(g.attrs["kind"]),
-                    float(g.attrs["sample_rate_hz"]),
-                    n_ch,
-                    geometry,
-                    units,
-                )
+                SensorInfo(name, sensor.kind, sensor.sample_rate_hz,
+                           len(sensor.channel_names), geometry,
+                           sorted(set(sensor.channel_units)))
             )
-        for name, g in h5["trials"].items():
+        for trial in f.trials():
             streams = {}
-            if "signals" in g:
-                for s_name, s in g["signals"].items():
-                    streams[s_name] = list(s["data"].shape)
+            for s_name in trial.signal_names:
+                where = f"{trial.where}/signals/{s_name}/data"
+                with _reading(f.path, where):
+                    shape = list(trial._group["signals"][s_name]["data"].shape)
+                if len(shape) != 2:
+                    raise InputError(f"data has shape {tuple(shape)}; expected (n_samples, "
+                                     "n_channels); `tactile validate FILE` lists every problem "
+                                     "of the file", path=f.path, where=where)
+                streams[s_name] = shape
+            with _reading(f.path, trial.where):
+                g = trial._group
+                n_events = int(g["events/t"].shape[0]) if "events" in g else 0
+                n_frames = int(g["frames/images"].shape[0]) if "frames" in g else 0
             summary.trials.append(
                 TrialInfo(
-                    name=name,
-                    duration_s=float(g.attrs.get("duration_s", 0.0)),
-                    split=attr_value(g.attrs.get("split", "")),
-                    labels={k: attr_value(v) for k, v in g["labels"].attrs.items()},
-                    n_events=int(g["events/t"].shape[0]) if "events" in g else 0,
+                    name=trial.name,
+                    duration_s=trial.duration_s,
+                    split=trial.split,
+                    labels=trial.labels,
+                    n_events=n_events,
                     streams=streams,
-                    n_frames=int(g["frames/images"].shape[0]) if "frames" in g else 0,
+                    n_frames=n_frames,
                 )
             )
     return summary
@@ -181,7 +193,7 @@ def recording_hashes(path: str | Path, own_sha256: str) -> list[str]:
     ``.h5``/``.hdf5``). Any other file (ingested from raw recordings, or made by ``tactile
     synth``) is its own recording: ``[own_sha256]``.
     """
-    with open_tactile(path) as h5:
+    with open_tactile(path) as h5, _reading(Path(path), "/provenance/sources"):
         if "provenance/sources/path" not in h5:
             return [own_sha256]
         paths = [attr_value(p) for p in h5["provenance/sources/path"][()]]

@@ -15,7 +15,12 @@ windows, annotations, ``t_s`` of signals and frames are all in seconds from that
 
 Errors: a missing node, a wrong dtype or an HDF5 read failure (a corrupt chunk, a bad
 checksum) is one :class:`~tactile_cli.errors.InputError` naming the file and the HDF5 path
-being read, never a library traceback.
+being read, never a library traceback. Content that ``tactile validate`` rejects is refused
+where it is read anyway, with cheap vectorised checks: retyped sensor attributes, events
+outside the sensor, out of time order or of a polarity other than -1/+1, non-finite or
+non-numeric samples, time bases that do not increase, class codes outside their classes,
+annotations that end before they start. The message names the HDF5 path and points at
+``tactile validate``, which lists every problem of the file.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from .spec import load_spec
 from .validate import check_readable
 
 #: Events read per block by :meth:`TrialEvents.blocks` (9 MiB of ``t`` and ``p``).
@@ -68,6 +74,64 @@ def _reading(path: Path, where: str) -> Iterator[None]:
     except (OSError, RuntimeError, ValueError, TypeError, IndexError, AttributeError) as exc:
         raise InputError(f"cannot be read ({exc.__class__.__name__}: {_flat(exc)}); check the "
                          "file with `tactile validate`", path=path, where=where) from None
+
+
+#: Rates above this are damage, not a sensor (the schema's maximum of ``sample_rate_hz``).
+MAX_RATE_HZ = 1e9
+
+#: Appended to a content error: the validator lists every problem, not only the first.
+_SEE_VALIDATE = "`tactile validate FILE` lists every problem of the file"
+
+
+def _content_error(path: Path, where: str, what: str) -> InputError:
+    """Content the schema forbids, found while reading ``where``."""
+    return InputError(f"{what}; {_SEE_VALIDATE}", path=path, where=where)
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) \
+        and not isinstance(value, (bool, np.bool_))
+
+
+def _number_attr(path: Path, where: str, attrs: dict[str, Any], key: str,
+                 default: float | None = None, *, minimum: float | None = None,
+                 maximum: float | None = None) -> float:
+    """Attribute ``key`` as a finite float (``default`` when absent)."""
+    if key not in attrs and default is not None:
+        return default
+    if key not in attrs:
+        raise _content_error(path, where, f"attribute {key!r} is missing")
+    value = attrs[key]
+    if not _is_number(value) or not np.isfinite(value):
+        raise _content_error(path, where, f"attribute {key!r} is {value!r}; expected a finite "
+                                          "number")
+    if minimum is not None and value < minimum:
+        raise _content_error(path, where, f"attribute {key!r} is {value!r}; expected a number "
+                                          f">= {minimum}")
+    if maximum is not None and value > maximum:
+        raise _content_error(path, where, f"attribute {key!r} is {value!r}; expected at most "
+                                          f"{maximum:g}")
+    return float(value)
+
+
+def _strings(path: Path, where: str, ds: h5py.Dataset) -> tuple[str, ...]:
+    """A 1-D string dataset as a tuple of str."""
+    if h5py.check_string_dtype(ds.dtype) is None or ds.ndim != 1:
+        raise _content_error(path, where, f"holds {ds.dtype} of shape {ds.shape}; expected a "
+                                          "1-D list of strings")
+    return tuple(str(c) for c in ds.asstr()[()])
+
+
+def _check_columns(path: Path, where: str, columns: dict[str, np.ndarray]) -> None:
+    """1-D columns of one length (a table read from a group)."""
+    lengths = {k: (v.shape[0] if v.ndim else None) for k, v in columns.items()}
+    if len({n for n in lengths.values()}) > 1:
+        desc = ", ".join(f"{k}={'scalar' if n is None else n}" for k, n in lengths.items())
+        raise _content_error(path, where, f"columns of unequal length ({desc})")
 
 
 def unknown_trial(path: str | Path, trial: str, names: Sequence[str]) -> InputError:
@@ -190,13 +254,32 @@ class TrialEvents:
             self._group = trial._group["events"]
             self._t = self._group["t"]
             self.n_events = int(self._t.shape[0])
-            attrs = self._group.attrs
-            self.sensor_name = str(attr_value(attrs["sensor"]))
+            for col in ("x", "y", "t", "p"):
+                ds = self._group[col]
+                if ds.ndim != 1 or ds.dtype.kind not in "iu":
+                    raise _content_error(self.path, f"{self.where}/{col}",
+                                         f"holds {ds.dtype} of shape {ds.shape}; expected 1-D "
+                                         "integers")
+                if ds.shape[0] != self.n_events:
+                    raise _content_error(self.path, f"{self.where}/{col}",
+                                         f"has {ds.shape[0]} events, t has {self.n_events}")
+            attrs = {k: attr_value(v) for k, v in self._group.attrs.items()}
+            self.sensor_name = str(attrs["sensor"])
+            for key in ("ms_index_origin_us", "t_origin_us"):
+                if key in attrs and not _is_int(attrs[key]):
+                    raise _content_error(self.path, self.where, f"attribute {key!r} is "
+                                         f"{attrs[key]!r}; expected an integer (us)")
             self._index_origin_us = int(attrs["ms_index_origin_us"])
             self.origin_us = int(attrs["t_origin_us"] if "t_origin_us" in attrs
                                  else self._index_origin_us)
             self._ms_to_idx = self._group["ms_to_idx"][()]
             self.t_last_us = int(self._t[self.n_events - 1]) if self.n_events else self.origin_us
+        idx = self._ms_to_idx
+        if idx.ndim != 1 or idx.dtype.kind not in "iu" or (idx.size and (
+                idx[0] != 0 or (np.diff(idx) < 0).any() or idx[-1] > self.n_events)):
+            raise _content_error(self.path, f"{self.where}/ms_to_idx",
+                                 "must be 1-D integers starting at 0, never decreasing and at "
+                                 "most the event count")
         duration_s = trial.duration_s
         last_s = (self.t_last_us + 1 - self.origin_us) * 1e-6 if self.n_events else 0.0
         self.end_s = max(duration_s, last_s)
@@ -205,6 +288,37 @@ class TrialEvents:
     def sensor(self) -> Sensor:
         """The event camera (its grid and optics)."""
         return self.trial.file.sensor(self.sensor_name)
+
+    def _check_block(self, start: int, t: np.ndarray, p: np.ndarray,
+                     x: np.ndarray | None = None, y: np.ndarray | None = None,
+                     prev_t: int | None = None) -> None:
+        """Events ``start:start + len(t)`` as the schema has them: ``t`` non-decreasing
+        (``prev_t``: the event before), ``p`` in {-1, +1}, ``x``/``y`` inside the sensor."""
+        def first(bad: np.ndarray) -> int:
+            return int(np.flatnonzero(bad)[0])
+
+        def fail(col: str, i: int, what: str) -> InputError:
+            return _content_error(self.path, f"{self.where}/{col}", f"event {start + i}: {what}")
+
+        # reductions first (no temporary masks); the mask only to name the first bad event
+        if p.size and (p.min() < -1 or p.max() > 1 or not p.all()):
+            i = first((p != 1) & (p != -1))
+            raise fail("p", i, f"polarity {p[i]} is not -1 or +1")
+        if t.size:
+            if prev_t is not None and t[0] < prev_t:
+                raise fail("t", 0, f"time {t[0]} us comes after a later time ({prev_t} us); "
+                                   "events must be sorted by time")
+            back = t[1:] < t[:-1]
+            if back.any():
+                i = first(back) + 1
+                raise fail("t", i, f"time {t[i]} us comes after a later time ({t[i - 1]} us); "
+                                   "events must be sorted by time")
+        for col, v, key in (("x", x, "width_px"), ("y", y, "height_px")):
+            limit = getattr(self.sensor, key) if v is not None and v.size else None
+            if limit is not None and v.max() >= limit:
+                i = first(v >= limit)
+                raise fail(col, i, f"{col} = {v[i]} is outside the sensor ({key} {limit} of "
+                                   f"/sensors/{self.sensor.name})")
 
     def to_us(self, t_s: float) -> int:
         """Trial seconds -> camera timestamp (us)."""
@@ -232,8 +346,10 @@ class TrialEvents:
         """Events ``lo:hi`` in storage order."""
         g = self._group
         with _reading(self.path, self.where):
-            return EventWindow(g["x"][lo:hi].astype(np.int64), g["y"][lo:hi].astype(np.int64),
-                               g["t"][lo:hi].astype(np.int64), g["p"][lo:hi])
+            w = EventWindow(g["x"][lo:hi].astype(np.int64), g["y"][lo:hi].astype(np.int64),
+                            g["t"][lo:hi].astype(np.int64), g["p"][lo:hi])
+        self._check_block(lo, w.t_us, w.p, w.x, w.y)
+        return w
 
     def window_us(self, t0_us: int, t1_us: int) -> EventWindow:
         """Events with camera timestamps ``t0_us <= t < t1_us``."""
@@ -252,12 +368,19 @@ class TrialEvents:
 
     def blocks(self, start: int = 0, block: int = READ_BLOCK
                ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """``(t_us, p)`` arrays of at most ``block`` events each, from index ``start``."""
+        """``(t_us, p)`` arrays of at most ``block`` events each, from index ``start``.
+
+        ``x`` and ``y`` are read too, only to refuse events outside the sensor (a count
+        of such events would be a count of damage)."""
         g = self._group
+        prev: int | None = None
         for a in range(start, self.n_events, block):
             b = min(a + block, self.n_events)
             with _reading(self.path, self.where):
-                yield g["t"][a:b], g["p"][a:b]
+                t, p, x, y = g["t"][a:b], g["p"][a:b], g["x"][a:b], g["y"][a:b]
+            self._check_block(a, t, p, x, y, prev_t=prev)
+            prev = int(t[-1]) if t.size else prev
+            yield t, p
 
 
 class Frames:
@@ -278,6 +401,12 @@ class Frames:
             self.shape = tuple(int(s) for s in self._images.shape[1:])
             self.t_s = np.asarray(self._group["t_s"][()], dtype=np.float64)
             self.sensor_name = str(attr_value(self._group.attrs.get("sensor", "")))
+        if self._images.ndim != 4 or self.t_s.shape != (self.n_frames,):
+            raise _content_error(self.path, self.where, f"images {self._images.shape} and t_s "
+                                 f"{self.t_s.shape} do not match (n_frames, height, width, 3)")
+        if not np.isfinite(self.t_s).all() or (np.diff(self.t_s) < 0).any():
+            raise _content_error(self.path, f"{self.where}/t_s", "frame times must be finite "
+                                 "and must not decrease")
 
     def __len__(self) -> int:
         return self.n_frames
@@ -338,7 +467,9 @@ class Trial:
     def duration_s(self) -> float:
         """The recorded duration, seconds (0 when not recorded)."""
         with _reading(self.path, self.where):
-            return float(self._group.attrs.get("duration_s", 0.0))
+            attrs = {"duration_s": attr_value(self._group.attrs["duration_s"])} \
+                if "duration_s" in self._group.attrs else {}
+        return _number_attr(self.path, self.where, attrs, "duration_s", minimum=0.0)
 
     @cached_property
     def attrs(self) -> dict[str, Any]:
@@ -354,10 +485,19 @@ class Trial:
             if "annotations" not in self._group:
                 return []
             ann = self._group["annotations"]
-            starts, ends = ann["start_s"][()], ann["end_s"][()]
-            labels = ann["label"].asstr()[()]
-            return [Annotation(float(s), float(e), str(lab))
-                    for s, e, lab in zip(starts, ends, labels, strict=True)]
+            starts = np.asarray(ann["start_s"][()], dtype=np.float64)
+            ends = np.asarray(ann["end_s"][()], dtype=np.float64)
+            labels = _strings(self.path, f"{where}/label", ann["label"])
+        _check_columns(self.path, where, {"start_s": starts, "end_s": ends,
+                                          "label": np.asarray(labels)})
+        bad = ~np.isfinite(starts) | ~np.isfinite(ends) | (ends < starts)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise _content_error(self.path, where, f"row {i} ({labels[i]!r}) runs from "
+                                 f"{float(starts[i])!r} s to {float(ends[i])!r} s; an interval "
+                                 "needs finite times and must not end before it starts")
+        return [Annotation(float(s), float(e), str(lab))
+                for s, e, lab in zip(starts, ends, labels, strict=True)]
 
     def annotation(self, label: str) -> Annotation | None:
         """The first annotation named ``label`` (case and surrounding spaces ignored)."""
@@ -414,19 +554,38 @@ class Trial:
         rows = rows if rows is not None else slice(None)
         with _reading(self.path, where):
             group = self._group["signals"][name]
+            for key in ("data", "t_s"):
+                kind = group[key].dtype.kind
+                if kind not in "iuf":
+                    raise _content_error(self.path, f"{where}/{key}", f"holds {group[key].dtype}; "
+                                         "expected numbers")
             data = group["data"][rows]
             t_s = np.asarray(group["t_s"][rows], dtype=np.float64)
             attrs = {k: attr_value(v) for k, v in group.attrs.items()}
             labels: dict[str, SampleLabel] = {}
             if "sample_labels" in group:
                 for key, ds in group["sample_labels"].items():
-                    classes = (tuple(str(attr_value(c)) for c in ds.attrs["classes"])
+                    lwhere = f"{where}/sample_labels/{key}"
+                    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf" \
+                            or ds.ndim != 1:
+                        raise _content_error(self.path, lwhere, "expected a 1-D dataset of "
+                                             "numbers")
+                    classes = (_class_names(self.path, lwhere, ds.attrs["classes"])
                                if "classes" in ds.attrs else None)
                     labels[key] = SampleLabel(ds[rows], classes)
         if data.ndim != 2:
             raise InputError(f"data has shape {data.shape}; expected (n_samples, n_channels)",
                              path=self.path, where=f"{where}/data")
-        names = sensor.channel_names or tuple(f"ch{k}" for k in range(data.shape[1]))
+        _check_samples(self.path, where, data, t_s, labels)
+        if "sample_rate_hz" in attrs:
+            rate = _number_attr(self.path, where, attrs, "sample_rate_hz", maximum=MAX_RATE_HZ)
+            if rate <= 0:
+                raise _content_error(self.path, where, f"attribute 'sample_rate_hz' is {rate!r}; "
+                                     "expected a rate > 0")
+        if not sensor.channel_names:
+            raise _content_error(self.path, f"{where}/data", f"has {data.shape[1]} columns but "
+                                 f"sensor {sensor.name!r} names no channels (channel_names)")
+        names = sensor.channel_names
         units = sensor.channel_units or ("",) * len(names)
         if len(names) != data.shape[1]:
             raise InputError(f"data has {data.shape[1]} channels but sensor {sensor.name!r} "
@@ -459,6 +618,50 @@ class Trial:
         return Frames(self)
 
 
+def _class_names(path: Path, where: str, value: Any) -> tuple[str, ...]:
+    names = attr_value(value)
+    names = names if isinstance(names, list) else [names]
+    if not all(isinstance(c, str) for c in names):
+        raise _content_error(path, where, f"attribute 'classes' is {names!r}; expected strings")
+    return tuple(names)
+
+
+def _check_samples(path: Path, where: str, data: np.ndarray, t_s: np.ndarray,
+                   labels: dict[str, SampleLabel]) -> None:
+    """A stream's samples as the schema has them: one time per row, finite data, a strictly
+    increasing finite time base, class codes inside their classes (-1: unlabelled)."""
+    if t_s.ndim != 1 or t_s.shape[0] != data.shape[0]:
+        raise _content_error(path, f"{where}/t_s", f"has shape {t_s.shape}; data has "
+                             f"{data.shape[0]} rows")
+    finite = np.isfinite(data)
+    if not finite.all():
+        r, c = (int(v[0]) for v in np.nonzero(~finite))
+        raise _content_error(path, f"{where}/data", f"row {r}, column {c} is "
+                             f"{float(data[r, c])!r}; samples must be finite")
+    steps = np.diff(t_s)
+    if not np.isfinite(t_s).all() or not (steps > 0).all():
+        bad = ~np.isfinite(t_s)
+        bad[1:] |= ~(steps > 0)
+        i = int(np.flatnonzero(bad)[0])
+        raise _content_error(path, f"{where}/t_s", f"time {float(t_s[i])!r} s at row {i} "
+                             + ("is not finite" if not np.isfinite(t_s[i]) else
+                                f"does not come after {float(t_s[i - 1])!r} s")
+                             + "; a time base must increase")
+    for key, lab in labels.items():
+        v = np.asarray(lab.values)
+        if v.shape[0] != data.shape[0]:
+            raise _content_error(path, f"{where}/sample_labels/{key}", f"has {v.shape[0]} "
+                                 f"values; the stream has {data.shape[0]} samples")
+        if lab.classes is not None:
+            k = len(lab.classes)
+            bad = ((v != np.round(v)) | (v < -1) | (v >= k))
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise _content_error(path, f"{where}/sample_labels/{key}",
+                                     f"sample {i} has class code {v[i].item()!r}; codes are 0.."
+                                     f"{k - 1} of its {k} classes, or -1 (unlabelled)")
+
+
 @dataclass(frozen=True)
 class Source:
     """One row of ``/provenance/sources``."""
@@ -488,15 +691,26 @@ class TactileFile:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         if not self.path.exists():
+            if self.path.is_symlink():
+                raise InputError("is a symbolic link that does not resolve (broken, or a "
+                                 "loop)", path=self.path)
             raise InputError("file not found", path=self.path)
         if self.path.is_dir():
             raise InputError("is a folder, not a tactile HDF5 file", path=self.path)
         try:
             self.schema_version = check_readable(self.path)
             self._h5 = h5py.File(self.path, "r")
-        except OSError as exc:
+        except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
             raise InputError(f"not a readable HDF5 file ({_flat(exc)})", path=self.path) from None
         self._sensors: dict[str, Sensor] = {}
+        for group in ("sensors", "trials"):  # an empty list of trials must not pass for one
+            try:
+                with _reading(self.path, f"/{group}"):
+                    if not isinstance(self._h5.get(group), h5py.Group):
+                        raise _content_error(self.path, f"/{group}", "required group is missing")
+            except InputError:
+                self._h5.close()
+                raise
 
     def __enter__(self) -> TactileFile:
         return self
@@ -553,18 +767,36 @@ class TactileFile:
         with _reading(self.path, where):
             g = self._h5["sensors"][name]
             attrs = {k: attr_value(v) for k, v in g.attrs.items()}
-            names = tuple(str(c) for c in g["channel_names"].asstr()[()]) \
+            names = _strings(self.path, f"{where}/channel_names", g["channel_names"]) \
                 if "channel_names" in g else ()
-            units = tuple(str(c) for c in g["channel_units"].asstr()[()]) \
+            units = _strings(self.path, f"{where}/channel_units", g["channel_units"]) \
                 if "channel_units" in g else ()
-            sensor = Sensor(
-                name=name, kind=str(attrs.get("kind", "")),
-                sample_rate_hz=float(attrs.get("sample_rate_hz", 0.0)),
-                channel_names=names, channel_units=units,
-                width_px=int(attrs["width_px"]) if "width_px" in attrs else None,
-                height_px=int(attrs["height_px"]) if "height_px" in attrs else None,
-                attrs=attrs,
-            )
+        kind = attrs.get("kind")
+        kinds = load_spec().enums["sensor_kind"]
+        if kind not in kinds:
+            raise _content_error(self.path, where, f"attribute 'kind' is {kind!r}; expected one "
+                                 f"of {', '.join(kinds)}")
+        rate = _number_attr(self.path, where, attrs, "sample_rate_hz", minimum=0.0,
+                            maximum=MAX_RATE_HZ)
+        if rate == 0 and kind != "event_camera":
+            raise _content_error(self.path, where, f"attribute 'sample_rate_hz' is 0 for a "
+                                 f"sensor of kind {kind!r}; a sampled sensor needs a rate > 0")
+        grid = {}
+        for key in ("width_px", "height_px"):
+            value = attrs.get(key)
+            if value is not None and (not _is_int(value) or value < 1):
+                raise _content_error(self.path, where, f"attribute {key!r} is {value!r}; "
+                                     "expected a whole number of pixels >= 1")
+            if value is None and kind in ("event_camera", "visuotactile"):
+                raise _content_error(self.path, where, f"attribute {key!r} is missing; a "
+                                     f"sensor of kind {kind} needs its pixel grid")
+            grid[key] = None if value is None else int(value)
+        if units and len(units) != len(names):
+            raise _content_error(self.path, f"{where}/channel_units", f"has {len(units)} "
+                                 f"units for {len(names)} channel names")
+        sensor = Sensor(name=name, kind=kind, sample_rate_hz=rate, channel_names=names,
+                        channel_units=units, width_px=grid["width_px"],
+                        height_px=grid["height_px"], attrs=attrs)
         self._sensors[name] = sensor
         return sensor
 
@@ -603,6 +835,8 @@ class TactileFile:
                                  where=where)
             cols = {k: (g[k].asstr()[()] if k in strings else g[k][()]) for k in keys}
             attrs = {k: attr_value(v) for k, v in g.attrs.items()}
+        if kind == "fits":  # a fits group is a table, one row per trial
+            _check_columns(self.path, where, {k: np.asarray(v) for k, v in cols.items()})
         return Derived(where, cols, attrs)
 
 

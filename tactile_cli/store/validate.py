@@ -2,8 +2,14 @@
 
 Structure (groups, datasets, dtypes, ranks, attributes) comes from the node rules of the
 spec; content rules (equal lengths, polarity values, monotonic time, pixel ranges, the
-millisecond index) come from its ``checks`` list. Large datasets are read in blocks, so a
-file with tens of millions of events validates in bounded memory.
+millisecond index, finite signals, positive rates, class codes, annotation order) come from
+its ``checks`` list. Large datasets are read in blocks, so a file with tens of millions of
+events validates in bounded memory.
+
+A damaged file is reported, never raised: a node or a check that cannot be read (a corrupt
+chunk, a metadata checksum error, a retyped attribute) becomes one violation at its HDF5
+path with the HDF5 message on one line; a file HDF5 cannot open at all is a report with
+``readable=False``.
 """
 
 from __future__ import annotations
@@ -23,7 +29,16 @@ from .spec import NodeSpec, Spec, load_spec, pattern_to_regex
 #: Elements read per block when a check scans a dataset.
 BLOCK = 1 << 22
 #: Checks that read every value of a dataset (skipped for datasets verified while written).
-_VALUE_SCANS = frozenset({"values_in", "non_decreasing", "finite", "below_sensor_attr"})
+_VALUE_SCANS = frozenset({"values_in", "non_decreasing", "increasing", "finite",
+                          "below_sensor_attr", "class_codes"})
+#: What goes wrong when h5py reads a damaged or retyped node.
+_READ_ERRORS = (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError,
+                AttributeError, OverflowError)
+
+
+def _flat(exc: BaseException) -> str:
+    """An HDF5 or OS error message on one line."""
+    return " ".join(str(exc).split()) or exc.__class__.__name__
 
 
 @dataclass(frozen=True)
@@ -32,9 +47,12 @@ class Violation:
 
     h5_path: str
     message: str
+    #: The source file the trial at ``h5_path`` was made from, when the file records it.
+    source: str | None = None
 
     def __str__(self) -> str:
-        return f"{self.h5_path}: {self.message}"
+        origin = f" (from {self.source})" if self.source else ""
+        return f"{self.h5_path}: {self.message}{origin}"
 
 
 @dataclass
@@ -45,6 +63,8 @@ class ValidationReport:
     schema_version: str | None
     violations: list[Violation] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: False when the file is missing or HDF5 cannot open it (the one violation says why).
+    readable: bool = True
 
     @property
     def ok(self) -> bool:
@@ -54,8 +74,11 @@ class ValidationReport:
         return {
             "file": self.file,
             "valid": self.ok,
+            "readable": self.readable,
             "schema_version": self.schema_version,
-            "violations": [{"path": v.h5_path, "message": v.message} for v in self.violations],
+            "violations": [{"path": v.h5_path, "message": v.message,
+                            **({"source": v.source} if v.source else {})}
+                           for v in self.violations],
             "notes": self.notes,
         }
 
@@ -71,18 +94,32 @@ def validate_file(
     """
     spec = spec or load_spec()
     report = ValidationReport(file=str(path), schema_version=None)
+    p = Path(path)
     try:
-        h5 = h5py.File(path, "r")
+        if p.is_symlink() and not p.exists():
+            raise FileNotFoundError(path)
+        if p.is_dir():
+            raise IsADirectoryError("is a folder")
+        h5 = h5py.File(p, "r")
     except FileNotFoundError:
-        report.violations.append(Violation("/", "file not found"))
+        report.readable = False
+        why = ("file not found" if not p.is_symlink() else
+               "is a symbolic link that does not resolve (broken, or a loop)")
+        report.violations.append(Violation("/", why))
         return report
-    except OSError as exc:
-        report.violations.append(
-            Violation("/", f"not a readable HDF5 file ({exc.__class__.__name__})")
-        )
+    except IsADirectoryError:
+        report.readable = False
+        report.violations.append(Violation("/", "is a folder, not a tactile HDF5 file"))
         return report
-    with h5:
-        _Validator(h5, spec, report, frozenset(verified)).run()
+    except (OSError, RuntimeError, ValueError) as exc:
+        report.readable = False
+        report.violations.append(Violation("/", f"not a readable HDF5 file ({_flat(exc)})"))
+        return report
+    try:
+        with h5:
+            _Validator(h5, spec, report, frozenset(verified)).run()
+    except _READ_ERRORS as exc:  # closing a damaged file; every read is guarded below
+        report.violations.append(Violation("/", f"cannot be read ({_flat(exc)})"))
     return report
 
 
@@ -99,15 +136,31 @@ class _Validator:
         self.spec = spec
         self.report = report
         self.strict = True  # False for a newer minor version: unknown nodes are allowed
+        self.read: set[str] = set()  # datasets whose every value a check has read
 
     def fail(self, h5_path: str, message: str) -> None:
         self.report.violations.append(Violation(h5_path, message))
 
+    def _guarded(self, h5_path: str, func, *args) -> None:
+        """Run one node check or content check; a read failure is one violation there."""
+        try:
+            func(*args)
+        except _READ_ERRORS as exc:
+            self.fail(h5_path, f"cannot be read ({exc.__class__.__name__}: {_flat(exc)})")
+
     # -- driver -----------------------------------------------------------------------
     def run(self) -> None:
-        if not self._check_version():
+        try:
+            if not self._check_version():
+                return
+        except _READ_ERRORS as exc:
+            self.fail("/", f"root attributes cannot be read ({_flat(exc)})")
             return
-        paths = self._all_paths()
+        try:
+            paths = self._all_paths()
+        except _READ_ERRORS as exc:
+            self.fail("/", f"the file's groups cannot be listed ({_flat(exc)}); it is damaged")
+            return
         instances: dict[str, list[tuple[str, dict[str, str]]]] = {
             n.path: [] for n in self.spec.nodes
         }
@@ -121,10 +174,41 @@ class _Validator:
                 continue
             node, values = m
             instances[node.path].append((p, values))
-            self._check_node(node, p)
-        self._check_required(instances, set(paths))
+            self._guarded(p, self._check_node, node, p)
+        self._guarded("/", self._check_required, instances, set(paths))
         for check in self.spec.checks:
             self._run_check(check, instances)
+        for p in paths:  # every chunk once, so a damaged one is reported wherever it is
+            if p not in self.read and p not in self.verified:
+                self._guarded(p, self._read_through, p)
+        try:
+            self._name_sources()
+        except _READ_ERRORS:
+            pass  # the sources table is reported by the checks above
+
+    def _name_sources(self) -> None:
+        """Point each violation inside a trial at the source file it came from (the
+        trial's ``source_index`` into ``/provenance/sources/path``), so an ingest that
+        breaks the schema names the input to fix."""
+        if not self.report.violations or "/provenance/sources/path" not in self.h5:
+            return
+        table = self.h5["/provenance/sources/path"]
+        if h5py.check_string_dtype(table.dtype) is None or table.ndim != 1:
+            return
+        paths = table.asstr()[()]
+        named: dict[str, str | None] = {}
+        out = []
+        for v in self.report.violations:
+            m = re.match(r"/trials/([^/ ]+)", v.h5_path)
+            if m and m[1] not in named:
+                named[m[1]] = None
+                group = self.h5.get(f"/trials/{m[1]}")
+                index = group.attrs.get("source_index") if group is not None else None
+                idx = np.atleast_1d(np.asarray(index)) if index is not None else np.empty(0)
+                if idx.dtype.kind in "iu" and idx.size and ((0 <= idx) & (idx < len(paths))).all():
+                    named[m[1]] = ", ".join(str(paths[i]) for i in idx)
+            out.append(Violation(v.h5_path, v.message, named[m[1]]) if m else v)
+        self.report.violations[:] = out
 
     def _check_version(self) -> bool:
         attrs = self.h5["/"].attrs
@@ -237,12 +321,17 @@ class _Validator:
         if kind == "string" and not isinstance(value, str):
             self.fail(where, f"value {value!r} is not a string")
             return
-        if kind == "integer" and not isinstance(value, (int, np.integer)):
+        if kind == "integer" and (not isinstance(value, (int, np.integer))
+                                  or isinstance(value, bool)):
             self.fail(where, f"value {value!r} is not an integer")
             return
-        if kind == "number" and not isinstance(value, (int, float, np.number)):
-            self.fail(where, f"value {value!r} is not a number")
-            return
+        if kind == "number":
+            if not isinstance(value, (int, float, np.number)) or isinstance(value, bool):
+                self.fail(where, f"value {value!r} is not a number")
+                return
+            if not np.isfinite(value):  # JSON numbers are finite; so are the schema's
+                self.fail(where, f"value {value!r} is not a finite number")
+                return
         if kind == "string_or_number" and not isinstance(value, (str, int, float, np.number)):
             self.fail(where, f"value {value!r} is not a string or a number")
             return
@@ -261,6 +350,10 @@ class _Validator:
             self.fail(where, f"value {value!r} does not match {rule['pattern']}")
         if "minimum" in rule and not value >= rule["minimum"]:
             self.fail(where, f"value {value!r} is below the minimum {rule['minimum']}")
+        if "maximum" in rule and not value <= rule["maximum"]:
+            self.fail(where, f"value {value!r} is above the maximum {rule['maximum']:g}")
+        if "exclusive_minimum" in rule and not value > rule["exclusive_minimum"]:
+            self.fail(where, f"value {value!r} must be above {rule['exclusive_minimum']}")
         if "ref" in rule:
             target = rule["ref"].replace("{value}", str(value))
             if target not in self.h5 or not isinstance(self.h5[target], h5py.Group):
@@ -315,37 +408,53 @@ class _Validator:
     ) -> None:
         name = check["check"]
         if name == "same_length":
-            self._check_same_length(check["paths"], instances)
+            self._guarded(check["paths"][0].rsplit("/", 1)[0], self._check_same_length,
+                          check["paths"], instances)
             return
         for p in list(self._expand(check["path"], instances)):
             if p in self.verified and name in _VALUE_SCANS:
                 continue
-            obj = self.h5[p]
-            if name == "values_in":
-                self._scan(
-                    obj,
-                    p,
-                    lambda a, allowed=check["values"]: ~np.isin(a, allowed),
-                    f"values outside {check['values']}",
-                )
-            elif name == "non_decreasing":
-                self._check_non_decreasing(obj, p)
-            elif name == "finite":
-                self._scan(obj, p, lambda a: ~np.isfinite(a), "non-finite values (NaN or inf)")
-            elif name == "below_sensor_attr":
-                self._check_below_sensor_attr(obj, p, check["attr"])
-            elif name == "ms_index":
-                self._check_ms_index(obj, p)
-            elif name == "columns_match_channels":
-                self._check_columns(obj, p)
-            elif name == "same_length_as":
-                other = _sibling_from_pattern(p, check["path"], check["as"])
-                if other in self.h5 and len(self.h5[other]) != len(obj):
-                    self.fail(p, f"has {len(obj)} rows, {other} has {len(self.h5[other])}")
-            elif name == "frame_geometry":
-                self._check_frames(obj, p)
-            else:  # a spec from a newer tool may name checks this one lacks
-                self.report.notes.append(f"check {name!r} of the spec is not known to this tool")
+            self._guarded(p, self._run_one, name, check, p)
+
+    def _run_one(self, name: str, check: dict[str, Any], p: str) -> None:
+        """Content check ``name`` on the concrete node ``p``."""
+        obj = self.h5[p]
+        if name == "values_in":
+            self._scan(
+                obj,
+                p,
+                lambda a, allowed=check["values"]: ~np.isin(a, allowed),
+                f"values outside {check['values']}",
+            )
+        elif name == "non_decreasing":
+            self._check_non_decreasing(obj, p)
+        elif name == "increasing":
+            self._check_non_decreasing(obj, p, strict=True)
+        elif name == "finite":
+            self._scan(obj, p, lambda a: ~np.isfinite(a), "non-finite values (NaN or inf)")
+        elif name == "below_sensor_attr":
+            self._check_below_sensor_attr(obj, p, check["attr"])
+        elif name == "ms_index":
+            self._check_ms_index(obj, p)
+        elif name == "columns_match_channels":
+            self._check_columns(obj, p)
+        elif name == "same_length_as":
+            other = _sibling_from_pattern(p, check["path"], check["as"])
+            if other in self.h5 and len(self.h5[other]) != len(obj):
+                self.fail(p, f"has {len(obj)} rows, {other} has {len(self.h5[other])}")
+        elif name == "frame_geometry":
+            self._check_frames(obj, p)
+        elif name == "sample_rate":
+            self._check_sample_rate(obj, p, check.get("zero_allowed_for", []))
+        elif name == "class_codes":
+            self._check_class_codes(obj, p, check.get("unlabelled"))
+        elif name == "not_before":
+            other = _sibling_from_pattern(p, check["path"], check["as"])
+            self._check_not_before(obj, p, other)
+        elif name == "columns_same_length":
+            self._check_columns_same_length(obj, p)
+        else:  # a spec from a newer tool may name checks this one lacks
+            self.report.notes.append(f"check {name!r} of the spec is not known to this tool")
 
     def _check_same_length(
         self, patterns: list[str], instances: dict[str, list[tuple[str, dict[str, str]]]]
@@ -368,29 +477,63 @@ class _Validator:
                 parent = members[0].rsplit("/", 1)[0]
                 self.fail(parent, f"datasets that must have equal length differ: {desc}")
 
+    def _numeric(self, ds: h5py.Dataset, p: str) -> bool:
+        """Whether ``ds`` holds numbers a value scan can read (a dtype violation is
+        reported by the node rules; a scalar or a string dataset is not scanned)."""
+        return ds.ndim >= 1 and ds.dtype.kind in "biuf"
+
+    @staticmethod
+    def _rows_per_block(ds: h5py.Dataset) -> int:
+        """Rows read at once: :data:`BLOCK` elements, however wide a row is."""
+        row = int(np.prod(ds.shape[1:], dtype=np.int64)) if ds.ndim > 1 else 1
+        return max(1, BLOCK // max(1, row))
+
+    def _read_through(self, p: str) -> None:
+        """Read every chunk of dataset ``p`` (decompression checks each one)."""
+        ds = self.h5[p]
+        if not isinstance(ds, h5py.Dataset):
+            return
+        if ds.ndim == 0 or ds.size == 0:
+            ds[()]
+            return
+        step = self._rows_per_block(ds)
+        for start in range(0, ds.shape[0], step):
+            ds[start : start + step]
+
     def _scan(self, ds: h5py.Dataset, p: str, bad_mask, what: str) -> None:
-        for start in range(0, ds.shape[0], BLOCK):
-            block = ds[start : start + BLOCK]
+        if not self._numeric(ds, p):
+            return
+        self.read.add(p)
+        step = self._rows_per_block(ds)
+        for start in range(0, ds.shape[0], step):
+            block = ds[start : start + step]
             bad = bad_mask(block)
             if bad.any():
-                i = int(np.flatnonzero(bad.reshape(len(block), -1).any(axis=1))[0]) + start
-                self.fail(p, f"{what}, first at index {i} (value {_plain(ds[i])!r})")
+                rows = bad.reshape(len(block), -1)
+                r = int(np.flatnonzero(rows.any(axis=1))[0])
+                value = block[r] if block.ndim == 1 else block[r][rows[r].reshape(block[r].shape)]
+                where = f"index {r + start}" if block.ndim == 1 else f"row {r + start}"
+                self.fail(p, f"{what}, first at {where} (value {_plain(_first(value))!r})")
                 return
 
-    def _check_non_decreasing(self, ds: h5py.Dataset, p: str) -> None:
+    def _check_non_decreasing(self, ds: h5py.Dataset, p: str, *, strict: bool = False) -> None:
+        if not self._numeric(ds, p) or ds.ndim != 1:
+            return
+        self.read.add(p)
         prev = None
+        worse = "does not increase" if strict else "goes backwards"
         for start in range(0, ds.shape[0], BLOCK):
             block = ds[start : start + BLOCK]
-            if prev is not None and block.size and block[0] < prev:
-                self.fail(p, f"time goes backwards at index {start} ({block[0]} after {prev})")
-                return
+            if block.size and prev is not None:
+                block = np.concatenate([[prev], block])
+                start -= 1
             d = np.diff(block)
-            if (d < 0).any():
-                i = int(np.flatnonzero(d < 0)[0])
+            bad = ~(d > 0) if strict else d < 0  # NaN steps fail the strict test
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
                 self.fail(
                     p,
-                    f"time goes backwards at index {start + i + 1} "
-                    f"({block[i + 1]} after {block[i]})",
+                    f"time {worse} at index {start + i + 1} ({block[i + 1]} after {block[i]})",
                 )
                 return
             if block.size:
@@ -408,7 +551,9 @@ class _Validator:
         sensor = self._sensor_of(p)
         if sensor is None or attr not in sensor.attrs:
             return
-        limit = int(sensor.attrs[attr])
+        limit = _plain(sensor.attrs[attr])
+        if not isinstance(limit, (int, np.integer)) or isinstance(limit, bool):
+            return  # reported by the sensor's attribute rule
         self._scan(ds, p, lambda a: a >= limit, f"values >= {attr} of {sensor.name} ({limit})")
 
     def _check_ms_index(self, group: h5py.Group, p: str) -> None:
@@ -418,7 +563,10 @@ class _Validator:
         ):
             return
         t, idx = group["t"], group["ms_to_idx"][()]
-        origin = int(group.attrs["ms_index_origin_us"])
+        origin = _plain(group.attrs["ms_index_origin_us"])
+        if not isinstance(origin, (int, np.integer)) or idx.ndim != 1 or idx.dtype.kind not in "iu":
+            return  # reported by the attribute and dataset rules
+        origin = int(origin)
         n = t.shape[0]
         if idx.size == 0:
             if n:
@@ -441,9 +589,74 @@ class _Validator:
                 )
                 return
 
+    def _check_sample_rate(self, group: h5py.Group, p: str, zero_ok: list[str]) -> None:
+        """A sensor's ``sample_rate_hz``: finite and > 0, or 0 for the kinds in
+        ``zero_ok`` (event cameras: asynchronous)."""
+        rate, kind = _plain(group.attrs.get("sample_rate_hz")), _as_str(group.attrs.get("kind"))
+        if not isinstance(rate, (int, float, np.number)) or isinstance(rate, bool):
+            return  # missing or not a number: reported by the attribute rule
+        if not np.isfinite(rate) or rate < 0:
+            return  # reported by the attribute rule
+        if rate == 0 and kind not in zero_ok:
+            self.fail(f"{p} (attribute 'sample_rate_hz')",
+                      f"value 0 is allowed only for sensors of kind {', '.join(zero_ok)} "
+                      f"(this one is {kind!r}); a sampled sensor needs its rate > 0")
+
+    def _check_class_codes(self, ds: h5py.Dataset, p: str, unlabelled: int | None) -> None:
+        """Per-sample class codes: whole numbers ``0 <= code < len(classes)`` (or the
+        ``unlabelled`` code); labels without ``classes`` are numbers, NaN where unknown."""
+        if "classes" not in ds.attrs:
+            return
+        classes = np.atleast_1d(np.asarray(ds.attrs["classes"]))
+        if classes.dtype.kind not in "OSU":
+            self.fail(f"{p} (attribute 'classes')", f"is {classes.dtype}, expected strings")
+            return
+        k = int(classes.size)
+        low = unlabelled if unlabelled is not None else 0
+        self._scan(
+            ds, p,
+            lambda a: ((a != np.round(a)) | (a < 0) | (a >= k)) & (a != low),
+            f"class codes outside 0..{k - 1} of its {k} classes"
+            + (f" (nor {unlabelled}, unlabelled)" if unlabelled is not None else ""),
+        )
+
+    def _check_not_before(self, ds: h5py.Dataset, p: str, other: str) -> None:
+        """Each value of ``ds`` (end_s) is at or after the same row of ``other`` (start_s)."""
+        if other not in self.h5 or not isinstance(self.h5[other], h5py.Dataset):
+            return
+        first = self.h5[other]
+        if not (self._numeric(ds, p) and self._numeric(first, other)) or ds.shape != first.shape:
+            return  # reported by the node rules and the equal-length check
+        end, start = ds[()], first[()]
+        bad = np.flatnonzero(end < start)
+        if bad.size:
+            i = int(bad[0])
+            self.fail(p, f"row {i} ends at {_plain(end[i])!r} s, before it starts "
+                         f"({other.rsplit('/', 1)[1]} = {_plain(start[i])!r} s)")
+
+    def _check_columns_same_length(self, group: h5py.Group, p: str) -> None:
+        """A table group (one row per trial): every dataset is a column of one length."""
+        if not isinstance(group, h5py.Group):
+            return
+        lengths: dict[str, int] = {}
+        for name, obj in group.items():
+            if not isinstance(obj, h5py.Dataset):
+                continue
+            if obj.ndim < 1:
+                self.fail(f"{p}/{name}", "is a scalar; expected a column (one row per trial)")
+                continue
+            lengths[name] = int(obj.shape[0])
+        if len(set(lengths.values())) > 1:
+            desc = ", ".join(f"{k}={v}" for k, v in lengths.items())
+            self.fail(p, f"columns that must have equal length differ: {desc}")
+
     def _check_columns(self, ds: h5py.Dataset, p: str) -> None:
         sensor = self._sensor_of(p)
-        if sensor is None or "channel_names" not in sensor or ds.ndim != 2:
+        if sensor is None or ds.ndim != 2:
+            return
+        if "channel_names" not in sensor:
+            self.fail(p, f"has {ds.shape[1]} columns but sensor {sensor.name} names no "
+                         "channels (channel_names is missing)")
             return
         n = sensor["channel_names"].shape[0]
         if ds.shape[1] != n:
@@ -453,7 +666,9 @@ class _Validator:
         sensor = self._sensor_of(p)
         if sensor is None or "images" not in group or "reference" not in group:
             return
-        h, w = sensor.attrs.get("height_px"), sensor.attrs.get("width_px")
+        h, w = _plain(sensor.attrs.get("height_px")), _plain(sensor.attrs.get("width_px"))
+        if not all(isinstance(v, (int, np.integer)) for v in (h, w)):
+            h = w = None  # reported by the sensor's attribute rules
         for name in ("images", "reference"):
             shape = group[name].shape
             hw = shape[-3:-1]
@@ -475,6 +690,13 @@ def _sibling_from_pattern(concrete: str, pattern: str, other_pattern: str) -> st
     regex, _ = pattern_to_regex(pattern)
     m = regex.fullmatch(concrete)
     return _fill(other_pattern, m.groupdict() if m else {})
+
+
+def _first(value: Any) -> Any:
+    """The first element of an array (the value a scan reports), else the value."""
+    if isinstance(value, np.ndarray):
+        return value.reshape(-1)[0] if value.size else value
+    return value
 
 
 def _plain(value: Any) -> Any:

@@ -214,8 +214,12 @@ def test_sample_period_from_rate_bin_width_or_time_steps(tmp_path):
         for name, attrs in (("rated", {"sample_rate_hz": 250.0}),
                             ("binned", {"sample_rate_hz": 0.0, "bin_s": 0.005}),
                             ("bare", {"sample_rate_hz": 0.0})):
-            s = w.add_sensor(name, kind="pressure", channel_names=["p"], channel_units="kPa",
-                             **attrs)
+            # a rate of 0 (the schema allows it for event cameras only: their count
+            # streams carry `bin_s`) leaves the period to `bin_s` or the time steps
+            if attrs["sample_rate_hz"] == 0:
+                attrs = {**attrs, "kind": "event_camera", "width_px": 8, "height_px": 8}
+            s = w.add_sensor(name, **{"kind": "pressure", **attrs}, channel_names=["p"],
+                             channel_units="kPa")
             w.trial(name).write_signal("s", sensor=s, data=np.zeros((50, 1)), t_s=t,
                                        sample_labels={"action": (np.zeros(50, np.int8),
                                                                  ["rest", "touch"])})
