@@ -79,14 +79,18 @@ def accumulate_command(
     def body() -> None:
         # imported here: the library pulls in the FOS package, which `tactile --help` skips
         from ..events.recording import accumulate_file, write_bins_csv, write_counts
+        from ..interrupt import raise_if_requested
+        from ..store.outdir import check_output_folder, output_folder
         from ..store.writer import current_command
 
         if smooth % 2 == 0:
             raise InputError(f"--smooth {smooth} must be odd (a centred moving average); "
                              f"use {smooth + 1}")
-        if plot is not None and plot.exists() and not plot.is_dir():
-            raise InputError("--plot must be a folder, not a file", path=plot)
+        if plot is not None:  # figures are added to an existing folder; a file there is not
+            check_output_folder(plot, merge=True)
         for target, flag in ((out, "--out"), (csv_out, "--csv")):
+            if target is not None and target.is_dir():
+                raise InputError(f"{flag} is a folder; give a file name", path=target)
             if target is not None and target.exists() and not overwrite:
                 raise InputError(f"{flag} output exists; pass --overwrite to replace it",
                                  path=target)
@@ -96,11 +100,12 @@ def accumulate_command(
             if plot is not None:
                 from ..events.figure import plot_trial
 
-                plot.mkdir(parents=True, exist_ok=True)
                 bar.start(len(run.trials), "plotting trials")
-                for acc in run.trials:
-                    plot_trial(acc, plot)
-                    bar.advance(1)
+                with output_folder(plot, merge=True) as tmp:  # in place when every one is
+                    for acc in run.trials:
+                        raise_if_requested()
+                        plot_trial(acc, tmp)
+                        bar.advance(1)
                 bar.finish()
         config = {"file": str(file), "trials": trial or None, "bin_s": bin_ms / 1000.0,
                   "smooth_bins": smooth, "segment": segment}

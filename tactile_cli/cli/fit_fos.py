@@ -164,10 +164,15 @@ def fit_fos_command(
     """
 
     def body() -> None:
+        from ..store.outdir import check_output_folder
         from ..store.trials import is_hdf5
 
         if not file.is_file():
             raise InputError("file not found", path=file)
+        if plot is not None:  # figures are added to an existing folder; a file there is not
+            check_output_folder(plot, merge=True)
+        if csv_out is not None and csv_out.is_dir():
+            raise InputError("is a folder; give a file name for --csv", path=csv_out)
         if csv_out is not None and csv_out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
         is_h5 = is_hdf5(file)
@@ -234,11 +239,13 @@ def fit_fos_command(
         figures: list[str] = []
         if plot is not None:
             from ..fos.plots import plot_region_fits
+            from ..store.outdir import output_folder
 
-            for region, rf in result["fits"].items():
-                if region in result["records"]:
-                    figures += [str(p) for p in plot_region_fits(rf, plot,
-                                                                 labels=result["labels"])]
+            with output_folder(plot, merge=True) as tmp:  # in place when every page is
+                for region, rf in result["fits"].items():
+                    if region in result["records"]:
+                        figures += [str(plot / p.name) for p in plot_region_fits(
+                            rf, tmp, labels=result["labels"])]
         if csv_out is not None:
             write_csv(csv_out, [rec for recs in result["records"].values() for rec in recs])
         if as_json:

@@ -49,6 +49,7 @@ def frames_command(
         from ..spatial.provenance import png_meta, provenance, write_json
         from ..spatial.render import KINDS, write_trial_frames
         from ..spatial.trial_events import event_trial_names, spatial_events
+        from ..store.outdir import check_output_folder, output_folder
         from ..store.trials import TactileFile
 
         if not file.exists():
@@ -64,6 +65,8 @@ def frames_command(
             raise InputError(f"--end-s (={end_s:g}) must be later than --start-s "
                              f"(={start_s:g})")
         config = load_config(rois) if rois is not None else None
+        # trial subfolders are added to an existing --out; a file there is refused
+        check_output_folder(out, merge=True)
         with TactileFile(file) as tf:
             names = list(trial) if trial else event_trial_names(tf)
             if not names:
@@ -75,6 +78,9 @@ def frames_command(
                 if config is not None:
                     config.check_sensor(te.sensor.width_px, te.sensor.height_px)
                 target = out / name
+                if target.exists() and not target.is_dir():
+                    raise InputError("is a file; give another --out folder or move the "
+                                     "file", path=target)
                 if target.exists() and any(target.glob("*.png")) and not overwrite:
                     raise InputError("holds PNGs of an earlier run; pass --overwrite to "
                                      "replace them", path=target)
@@ -84,22 +90,21 @@ def frames_command(
                        "rois": None if config is None else config.as_dict()}
             record = provenance([file], options)
             meta = png_meta(record)
-            out.mkdir(parents=True, exist_ok=True)
             written = []
-            for name, tr in zip(names, chosen, strict=True):
-                target = out / name
-                target.mkdir(parents=True, exist_ok=True)
-                for old in target.glob("frame_*.png"):
-                    old.unlink()
-                summary = write_trial_frames(
-                    tr, target, window_s=window_ms * 1e-3, median=median,
-                    kind=kind, rois=() if config is None else config.rois, start_s=start_s,
-                    end_s=end_s, sheet_max=sheet_max, frame_pngs=not sheet_only, meta=meta,
-                )
-                summary["folder"] = str(target)
-                written.append(summary)
-        record["outputs"] = written
-        write_json(out / "frames.json", record)
+            # built in a hidden folder beside --out; each trial folder (replacing an earlier
+            # one) and frames.json are renamed into --out only when every trial is drawn
+            with output_folder(out, merge=True) as tmp:
+                for name, tr in zip(names, chosen, strict=True):
+                    summary = write_trial_frames(
+                        tr, tmp / name, window_s=window_ms * 1e-3, median=median,
+                        kind=kind, rois=() if config is None else config.rois,
+                        start_s=start_s, end_s=end_s, sheet_max=sheet_max,
+                        frame_pngs=not sheet_only, meta=meta,
+                    )
+                    summary["folder"] = str(out / name)
+                    written.append(summary)
+                record["outputs"] = written
+                write_json(tmp / "frames.json", record)
         if as_json:
             typer.echo(json.dumps(record, indent=2))
             return

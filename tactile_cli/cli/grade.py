@@ -73,8 +73,14 @@ def grade_command(
             raise InputError("--calibrate needs --out NEW_CONFIG.yaml")
         if out is not None and not calibrate:
             raise InputError("--out is the config written by --calibrate; add --calibrate")
+        if out is not None and out.is_dir():
+            raise InputError("is a folder; give a file name for --out", path=out)
         if out is not None and out.exists() and not overwrite:
             raise InputError("exists; pass --overwrite to replace it", path=out)
+        if plot is not None:  # figures are added to an existing folder; a file there is not
+            from ..store.outdir import check_output_folder
+
+            check_output_folder(plot, merge=True)
         config_path = config or default_config_path()
         cfg = load_config(config_path)
         areas = load_areas(files, bin_s=cfg.feature.bin_s, region=cfg.feature.region,
@@ -139,21 +145,23 @@ def _calibrate(cfg, config_path, areas, label_key, overlap, out):
 
 def _plots(cfg, report: GradeReport, folder: Path) -> list[Path]:
     from ..grade.plots import plot_area_vs_level, plot_inference, plot_membership
+    from ..store.outdir import output_folder
 
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = [plot_membership(cfg, folder / "membership.png")]
-    graded = [t for t in report.trials if t.area == t.area]
-    if graded:
-        # like Fig. 22: the trial where two rules fire most evenly
-        def second(t) -> float:
-            return sorted(t.firing.values())[-2] if len(t.firing) > 1 else 0.0
+    with output_folder(folder, merge=True) as tmp:  # in place when every figure is
+        paths = [plot_membership(cfg, tmp / "membership.png")]
+        graded = [t for t in report.trials if t.area == t.area]
+        if graded:
+            # like Fig. 22: the trial where two rules fire most evenly
+            def second(t) -> float:
+                return sorted(t.firing.values())[-2] if len(t.firing) > 1 else 0.0
 
-        example = max(graded, key=second)
-        paths.append(plot_inference(cfg, example.area, folder / "inference.png",
-                                    title=f"trial {example.trial}: area {example.area:.6g}"))
-    if report.summary.pearson_r is not None:
-        paths.append(plot_area_vs_level(report, folder / "area_vs_level.png"))
-    return paths
+            example = max(graded, key=second)
+            paths.append(plot_inference(cfg, example.area, tmp / "inference.png",
+                                        title=f"trial {example.trial}: area "
+                                        f"{example.area:.6g}"))
+        if report.summary.pearson_r is not None:
+            paths.append(plot_area_vs_level(report, tmp / "area_vs_level.png"))
+    return [folder / p.name for p in paths]
 
 
 def _print(report: GradeReport, cfg, config_path, calib, plots, *, multi_file: bool) -> None:

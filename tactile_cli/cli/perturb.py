@@ -88,6 +88,10 @@ def perturb_and_print(
         raise InputError("no run folder; give RUN")
     if not files:
         raise InputError("no data files; give --data FILE...")
+    if out is not None:  # the chart is added to an existing folder; a file there is refused
+        from ..store.outdir import check_output_folder
+
+        check_output_folder(out, merge=True)
     absolute, relative = parse_threshold(threshold)
     level_map = parse_levels(levels)
     kind_list = [k for k in kinds.split(",") if k.strip()]

@@ -23,13 +23,16 @@ def plot_command(
 
     def body() -> None:
         from ..plots.quicklook import write_html  # matplotlib loads only when plotting
+        from ..store.outdir import check_output_folder, output_folder
         from ..store.trials import TactileFile
 
-        for f in files:  # every input opens (schema gate included) before --out is made
+        # figures are added to an existing --out (same names replaced); a file there is not
+        check_output_folder(out, merge=True)
+        for f in files:  # every input opens (schema gate included) before any work
             with TactileFile(f):
                 pass
-        out.mkdir(parents=True, exist_ok=True)
-        page = write_html(list(files), out, max_trials=max_trials)
-        typer.echo(f"wrote {page}")
+        with output_folder(out, merge=True) as tmp:  # in place only when every figure is
+            write_html(list(files), tmp, max_trials=max_trials)
+        typer.echo(f"wrote {out / 'index.html'}")
 
     run_guarded(body)

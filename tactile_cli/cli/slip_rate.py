@@ -48,9 +48,12 @@ def slip_rate_command(
         from ..spatial.config import load_config
         from ..spatial.provenance import png_meta, provenance, write_json
         from ..spatial.slip_rate import estimate_slip_rates
+        from ..store.outdir import check_output_folder, output_folder
 
         if not file.exists():
             raise InputError("file not found", path=file)
+        if plot is not None:  # figures are added to an existing folder; a file there is not
+            check_output_folder(plot, merge=True)
         config = load_config(rois) if rois is not None else None
         estimates = estimate_slip_rates(file, config, trials=trial)
         results = [e.result.as_dict() for e in estimates]
@@ -72,12 +75,12 @@ def slip_rate_command(
         if plot is not None:
             from ..spatial.render import plot_slip
 
-            plot.mkdir(parents=True, exist_ok=True)
             meta = png_meta(record)
-            for e in estimates:
-                if e.trace is not None:
-                    plot_slip(e, plot / f"slip_{e.result.trial}.png", meta=meta)
-            write_json(plot / "slip_rate.json", record)
+            with output_folder(plot, merge=True) as tmp:  # in place when every figure is
+                for e in estimates:
+                    if e.trace is not None:
+                        plot_slip(e, tmp / f"slip_{e.result.trial}.png", meta=meta)
+                write_json(tmp / "slip_rate.json", record)
         if as_json:
             typer.echo(json.dumps(record, indent=2, allow_nan=False))
             return

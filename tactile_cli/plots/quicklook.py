@@ -26,6 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..errors import InputError  # noqa: E402
+from ..interrupt import raise_if_requested  # noqa: E402
 from ..store.reader import summarize  # noqa: E402
 from ..store.trials import Frames, Signal, TactileFile, Trial, TrialEvents  # noqa: E402
 
@@ -201,6 +202,7 @@ def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> 
     with TactileFile(path) as tf:
         out_dir.mkdir(parents=True, exist_ok=True)
         for name in tf.trial_names[:max_trials]:
+            raise_if_requested()  # Ctrl-C stops between figures (the CLI's handler only marks)
             trial = tf.trial(name)
             labels = ", ".join(f"{k}={v}" for k, v in trial.labels.items())
             title = f"{path.name} / {name}" + (f" ({labels})" if labels else "")
@@ -208,10 +210,12 @@ def quicklook(path: str | Path, out_dir: str | Path, *, max_trials: int = 4) -> 
                 f = out_dir / f"{path.stem}__{name}__events.png"
                 _events_figure(trial.events, title, f)
                 figures.append(Figure(f, f"{title}: events per 20 ms and net polarity per pixel"))
+            raise_if_requested()
             if trial.signal_names:
                 f = out_dir / f"{path.stem}__{name}__signals.png"
                 _signals_figure(trial, title, f)
                 figures.append(Figure(f, f"{title}: sampled streams"))
+            raise_if_requested()
             if trial.has_frames:
                 f = out_dir / f"{path.stem}__{name}__frames.png"
                 _frames_figure(trial.frames(), title, f)
@@ -236,6 +240,7 @@ def write_html(
         f"<h1>{html.escape(title)}</h1>",
     ]
     for f in files:
+        raise_if_requested()
         s = summarize(f)
         parts.append(
             f"<h2>{html.escape(f.name)}</h2><p>schema {s.schema_version}, tactile "

@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..interrupt import raise_if_requested
+from ..store.outdir import check_output_folder, output_folder
 from .events import write_events_csv as write_events_csv
 from .events import write_events_npy as write_events_npy
 from .images import write_image_sequence as write_image_sequence
@@ -32,44 +34,47 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
 
     Returns ``{"paths": {...}, "commands": {name: [args after "tactile"]}}``.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    geometry = ["--width", str(EVENT_WIDTH), "--height", str(EVENT_HEIGHT)]
-    write_events_csv(
-        out / "events.csv",
-        n_events,
-        width=EVENT_WIDTH,
-        height=EVENT_HEIGHT,
-        seed=seed,
-        polarity="01",
-        mean_dt_us=5,
-    )
-    write_events_npy(
-        out / "events.npy",
-        n_events,
-        width=EVENT_WIDTH,
-        height=EVENT_HEIGHT,
-        seed=seed + 1,
-        mean_dt_us=5,
-    )
-    write_accel_tree(out / "accel_tree", seconds=0.5, seed=seed)
-    taxel = write_taxel_recording(out / "taxel", seed=seed)
-    for k in (1, 2):
-        write_image_sequence(
-            out / "visuotactile" / f"press_{k:02d}",
-            n_frames=12,
-            width=160,
-            height=120,
-            seed=seed + k,
-            frame_rate_hz=30.0,
+    out = check_output_folder(out_dir, merge=True)  # added to; a file there is refused
+    # written into a hidden folder beside ``out_dir``, moved in when every file is
+    with output_folder(out, merge=True) as tmp:
+        geometry = ["--width", str(EVENT_WIDTH), "--height", str(EVENT_HEIGHT)]
+        write_events_csv(
+            tmp / "events.csv",
+            n_events,
+            width=EVENT_WIDTH,
+            height=EVENT_HEIGHT,
+            seed=seed,
+            polarity="01",
+            mean_dt_us=5,
         )
+        write_events_npy(
+            tmp / "events.npy",
+            n_events,
+            width=EVENT_WIDTH,
+            height=EVENT_HEIGHT,
+            seed=seed + 1,
+            mean_dt_us=5,
+        )
+        write_accel_tree(tmp / "accel_tree", seconds=0.5, seed=seed)
+        raise_if_requested()
+        taxel = write_taxel_recording(tmp / "taxel", seed=seed)
+        mapping = out / Path(taxel["mapping"]).relative_to(tmp)  # where it will be
+        for k in (1, 2):
+            write_image_sequence(
+                tmp / "visuotactile" / f"press_{k:02d}",
+                n_frames=12,
+                width=160,
+                height=120,
+                seed=seed + k,
+                frame_rate_hz=30.0,
+            )
     return {
         "paths": {"root": out},
         "commands": {
             "events_csv": ["ingest", str(out / "events.csv"), *geometry],
             "events_npy": ["ingest", str(out / "events.npy"), *geometry],
             "accel": ["ingest", str(out / "accel_tree"), "--format", "accel-tree"],
-            "taxel": ["ingest", str(out / "taxel"), "--mapping", str(taxel["mapping"])],
+            "taxel": ["ingest", str(out / "taxel"), "--mapping", str(mapping)],
             "visuotactile": [
                 "ingest",
                 str(out / "visuotactile" / "press_01"),

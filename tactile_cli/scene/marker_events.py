@@ -26,7 +26,6 @@ import csv
 import io
 import json
 import os
-import shutil
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -39,6 +38,7 @@ from .._version import __version__
 from ..errors import InputError
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
+from ..store.outdir import check_output_folder, output_folder
 from ..store.writer import current_command
 from .config import SceneConfig
 from .events import EVENT_DTYPE, trial_events
@@ -117,37 +117,30 @@ def simulate_marker_events(
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
     seed = int(seed)
-    out = Path(out_dir)
-    _check_output(out, overwrite)
+    out = check_output_folder(out_dir, overwrite=overwrite)
     layout = scene_layout(config)
-    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
-    _remove_stale(out)
-    shutil.rmtree(tmp, ignore_errors=True)
     cells = [(g, k) for g in range(1, config.trials.groups + 1)
              for k in config.trials.selected_levels]
     written: list[SimulatedTrial] = []
     try:
-        tmp.mkdir()
-        progress.start(len(cells), "marker events")
-        for group, level in cells:
-            raise_if_requested()
-            rng = trial_rng(seed, group, level)
-            trial = draw_trial(config, group, level, rng)
-            drawn = trial_events(trial, expected_rates(trial, config), layout, rng)
-            np.save(tmp / f"{trial.name}.npy", drawn.events, allow_pickle=False)
-            written.append(SimulatedTrial(trial, drawn.n_events, drawn.n_positive,
-                                          drawn.n_negative, drawn.n_background))
-            progress.advance(1)
-        _write_text(tmp / "trials.csv", _trials_csv(written))
-        _write_text(tmp / "annotations.csv", _annotations_csv([w.trial for w in written]))
-        scene = _scene_json(config, layout, seed,
-                            command if command is not None else current_command(), written)
-        _write_text(tmp / "scene.json", json.dumps(scene, indent=2) + "\n")
-        raise_if_requested()
-        _move_into_place(tmp, out, overwrite)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        # built in a hidden folder beside ``out`` and renamed into place when complete
+        with output_folder(out, overwrite=overwrite) as tmp:
+            progress.start(len(cells), "marker events")
+            for group, level in cells:
+                raise_if_requested()
+                rng = trial_rng(seed, group, level)
+                trial = draw_trial(config, group, level, rng)
+                drawn = trial_events(trial, expected_rates(trial, config), layout, rng)
+                np.save(tmp / f"{trial.name}.npy", drawn.events, allow_pickle=False)
+                written.append(SimulatedTrial(trial, drawn.n_events, drawn.n_positive,
+                                              drawn.n_negative, drawn.n_background))
+                progress.advance(1)
+            _write_text(tmp / "trials.csv", _trials_csv(written))
+            _write_text(tmp / "annotations.csv", _annotations_csv([w.trial for w in written]))
+            scene = _scene_json(config, layout, seed,
+                                command if command is not None else current_command(), written)
+            _write_text(tmp / "scene.json", json.dumps(scene, indent=2) + "\n")
+            _fsync_folder(tmp)
     finally:
         progress.finish()
     duration = sum(w.trial.timeline.end_s for w in written)
@@ -156,50 +149,14 @@ def simulate_marker_events(
 
 
 # -- output ---------------------------------------------------------------------------------
-def _check_output(out: Path, overwrite: bool) -> None:
-    if out.exists() and not out.is_dir():
-        raise InputError("output exists and is not a folder; give a folder name", path=out)
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
-                         "replace it", path=out)
-    if not out.parent.is_dir():
-        raise InputError("the output's parent folder does not exist", path=out.parent)
-
-
-def _remove_stale(out: Path) -> None:
-    """Delete temporary folders of ``out`` left by killed runs (their pid is gone)."""
-    for tmp in out.parent.glob(f".{out.name}.*-*"):
-        pid = tmp.name.rsplit("-", 1)[1]
-        if not pid.isdigit() or not tmp.is_dir():
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
-            shutil.rmtree(tmp, ignore_errors=True)
-        except PermissionError:
-            pass
-
-
-def _move_into_place(tmp: Path, out: Path, overwrite: bool) -> None:
-    """Rename the finished folder to ``out`` (replacing an empty folder, or a full one when
-    ``overwrite``; the old one is moved aside first and deleted after)."""
-    for path in [*tmp.iterdir(), tmp]:
+def _fsync_folder(folder: Path) -> None:
+    """Flush the files of ``folder`` and the folder itself to disk before the rename."""
+    for path in [*folder.iterdir(), folder]:
         fd = os.open(path, os.O_RDONLY)
         try:
             os.fsync(fd)
         finally:
             os.close(fd)
-    if out.is_dir() and any(out.iterdir()):
-        if not overwrite:  # appeared while we simulated
-            raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
-                             "replace it", path=out)
-        old = out.with_name(f".{out.name}.old-{os.getpid()}")
-        shutil.rmtree(old, ignore_errors=True)
-        os.replace(out, old)
-        os.replace(tmp, out)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(tmp, out)  # rename() replaces an empty folder
 
 
 def _write_text(path: Path, text: str) -> None:

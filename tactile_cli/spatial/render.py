@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 from PIL import Image, PngImagePlugin  # noqa: E402
 
+from ..interrupt import raise_if_requested  # noqa: E402
 from ..store.trials import Trial  # noqa: E402
 from .roi import Roi  # noqa: E402
 from .slip_rate import SlipRateEstimate  # noqa: E402
@@ -207,6 +208,7 @@ def write_trial_frames(
     k = 0
     for batch in iter_trial_frames(trial, window_s=window_s, start_s=start_s, end_s=stop_s,
                                    median=median):
+        raise_if_requested()  # the CLI's Ctrl-C handler only marks the request
         for i in range(batch.n_frames):
             rgb = frame_rgb(batch.positive[i], batch.negative[i], kind=kind)
             if frame_pngs:

@@ -18,6 +18,7 @@ import json
 import os
 import re
 import shlex
+import shutil
 import sys
 import threading
 import zlib
@@ -53,9 +54,13 @@ _LIVE_TEMPORARIES: set[Path] = set()
 
 
 def remove_live_temporaries() -> None:
-    """Delete the temporary files of every unfinished writer of this process."""
+    """Delete the temporary files (and folders, see :mod:`.outdir`) of every unfinished
+    writer of this process."""
     for tmp in list(_LIVE_TEMPORARIES):
-        tmp.unlink(missing_ok=True)
+        if tmp.is_dir() and not tmp.is_symlink():
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            tmp.unlink(missing_ok=True)
         _LIVE_TEMPORARIES.discard(tmp)
 
 
@@ -173,10 +178,13 @@ class StoreWriter:
         compression: Compression = DEFAULT_COMPRESSION,
     ):
         self.out = Path(out)
+        if self.out.is_dir():  # before the `overwrite=True` hint, which would not help
+            raise InputError("output is a folder; give a file name ending in .h5", path=self.out)
         if self.out.exists() and not overwrite:
             raise InputError("output exists; pass `overwrite=True` to replace it", path=self.out)
-        if self.out.is_dir():
-            raise InputError("output is a folder; give a file name ending in .h5", path=self.out)
+        if self.out.parent.exists() and not self.out.parent.is_dir():
+            raise InputError("is a file, not a folder; give an output path in a folder",
+                             path=self.out.parent)
         if not self.out.parent.exists():
             raise InputError("output folder does not exist", path=self.out.parent)
         self.tmp = self.out.with_name(f".{self.out.name}.tmp-{os.getpid()}")
