@@ -1,14 +1,21 @@
-"""Read a YAML config file into (text, parsed value), with one-line errors.
+"""Read a YAML config file into (text, parsed value), and any text file, with one-line errors.
 
 Every config of the toolkit (train, scene, synth, grade, ROI, ingest mapping) is read the
 same way: the text first (so a later validation error can name the key's line), then
 ``yaml.safe_load``. A missing or unreadable file, or text that is not YAML, is one
 :class:`~tactile_cli.errors.InputError` naming the file and, for YAML, the line and column
 of the problem and where the enclosing construct starts.
+
+Text inputs that may not be text (CSV tables, timestamps, sidecars) are read as bytes and
+decoded with :func:`decode_utf8`, so a stray byte is reported at its line and column
+instead of as a ``UnicodeDecodeError``; :func:`missing_file_error` tells a missing file
+from a broken symlink or a symlink loop.
 """
 
 from __future__ import annotations
 
+import errno
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -18,17 +25,75 @@ import yaml
 from .errors import InputError
 
 
+def missing_file_error(path: str | Path, what: str = "file") -> InputError:
+    """The error for a ``path`` that cannot be opened because it is not there: "not found",
+    or, when ``path`` is a symlink, "a symlink loop" or "a broken symlink" (``what``:
+    "file", "config file")."""
+    path = Path(path)
+    try:
+        path.resolve(strict=True)
+    except RuntimeError:  # Python < 3.13 reports a loop this way
+        return InputError(f"{what} is a symlink loop; point the link at a real file", path=path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return InputError(f"{what} is a symlink loop; point the link at a real file",
+                              path=path)
+        if path.is_symlink():
+            return InputError(f"{what} is a broken symlink (it points to "
+                              f"{os.readlink(path)!r}, which does not exist)", path=path)
+    return InputError(f"{what} not found", path=path)
+
+
+def os_error(exc: OSError, path: str | Path, what: str = "file") -> InputError:
+    """One-line :class:`InputError` for an ``OSError`` raised while opening or reading
+    ``path``."""
+    path = Path(path)
+    if isinstance(exc, FileNotFoundError) or exc.errno == errno.ELOOP:
+        return missing_file_error(path, what)
+    if isinstance(exc, IsADirectoryError):
+        return InputError(f"{what} is a folder; expected a file", path=path)
+    if isinstance(exc, PermissionError):
+        return InputError(f"cannot read the {what}: permission denied", path=path)
+    reason = " ".join(str(exc.strerror or exc).split())
+    return InputError(f"cannot read the {what} ({exc.__class__.__name__}: {reason})", path=path)
+
+
+def decode_utf8(data: bytes, path: str | Path, *, first_line: int = 1,
+                advice: str = "save the file as UTF-8") -> str:
+    """``data`` (the bytes of ``path``, from its line ``first_line`` on) as text; a UTF-8 byte
+    order mark at the start is dropped. A byte that is not UTF-8 is an :class:`InputError`
+    naming its line and byte column: ``FILE, line 7: not UTF-8 text (byte 0xff at column 3);
+    save the file as UTF-8`` (``advice`` is what to do)."""
+    bom = 3 if first_line == 1 and data.startswith(b"\xef\xbb\xbf") else 0
+    try:
+        return data[bom:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        start = bom + exc.start
+        line_start = data.rfind(b"\n", 0, start) + 1
+        line = first_line + data.count(b"\n", 0, start)
+        raise InputError(f"not UTF-8 text (byte 0x{data[start]:02x} at column "
+                         f"{start - line_start + 1}); {advice}", path=Path(path),
+                         where=f"line {line}") from None
+
+
+def read_bytes(path: str | Path, what: str = "file") -> bytes:
+    """The bytes of ``path``; a file that cannot be read is one :class:`InputError`."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise os_error(exc, path, what) from None
+
+
+def read_text(path: str | Path, what: str = "file", *,
+              advice: str = "save the file as UTF-8") -> str:
+    """The UTF-8 text of ``path`` (see :func:`read_bytes`, :func:`decode_utf8`)."""
+    return decode_utf8(read_bytes(path, what), path, advice=advice)
+
+
 def read_config_text(path: str | Path, what: str = "config file") -> str:
     """The UTF-8 text of ``path``; ``what`` names the file in the error ("config file",
     "mapping file")."""
-    path = Path(path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{what} not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the {what} ({exc.__class__.__name__}: {exc})",
-                         path=path) from None
+    return read_text(path, what)
 
 
 def parse_yaml(text: str, path: str | Path) -> Any:
@@ -81,10 +146,53 @@ def key_line(text: str, keys: Sequence[Any], *, start: int | None = None,
     return line
 
 
+def machine_memory_bytes() -> int | None:
+    """Physical memory of this machine in bytes (``/proc/meminfo`` MemTotal, else
+    ``os.sysconf``); None when neither tells."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemTotal:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def format_bytes(n: float) -> str:
+    """``8.0 TB``, ``24 GB``, ``512 MB``: decimal units, two significant digits."""
+    for unit, size in (("EB", 1e18), ("PB", 1e15), ("TB", 1e12), ("GB", 1e9), ("MB", 1e6),
+                       ("kB", 1e3)):
+        if n >= size:
+            return f"{n / size:.2g} {unit}" if n / size < 10 else f"{n / size:.0f} {unit}"
+    return f"{n:.0f} B"
+
+
+def check_fits_in_memory(needed_bytes: float, key: str, purpose: str, *,
+                         path: str | Path | None, text: str | None, keys: Sequence[Any]) -> None:
+    """Refuse a config whose sizes cannot fit: ``needed_bytes`` (an estimate, from the
+    config alone) above this machine's physical memory is an :class:`InputError` at the line
+    of ``keys``: ``train.yaml, line 12: `model.hidden` (=1000000000000) needs about 64 TB for
+    its weights; this machine has 24 GB: make it smaller`` (``key``: "`model.hidden`
+    (=1000000000000)", ``purpose``: "for its weights")."""
+    memory = machine_memory_bytes()
+    if memory is None or needed_bytes <= memory:
+        return
+    line = key_line(text, keys) if text else None
+    raise InputError(f"{key} needs about {format_bytes(needed_bytes)} {purpose}; this machine "
+                     f"has {format_bytes(memory)}: make it smaller", path=path,
+                     where=None if line is None else f"line {line}")
+
+
 def read_yaml(path: str | Path, what: str = "config file") -> tuple[str, Any]:
     """``(text, parsed)`` of a YAML file (see :func:`read_config_text`, :func:`parse_yaml`)."""
     text = read_config_text(path, what)
     return text, parse_yaml(text, path)
 
 
-__all__ = ["key_line", "parse_yaml", "read_config_text", "read_yaml"]
+__all__ = ["check_fits_in_memory", "decode_utf8", "format_bytes", "key_line",
+           "machine_memory_bytes", "missing_file_error", "os_error", "parse_yaml", "read_bytes",
+           "read_config_text", "read_text", "read_yaml"]

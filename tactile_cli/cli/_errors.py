@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 import signal
 import sys
+import warnings
 from collections.abc import Callable, Mapping
 from typing import NoReturn, TypeAlias, TypeVar
 
@@ -89,6 +90,40 @@ def fail(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
     raise SystemExit(code)
 
 
+#: At most this many library warnings are printed after a command (the rest are counted).
+MAX_WARNINGS_SHOWN = 5
+
+
+def _warning_lines(caught: list[warnings.WarningMessage]) -> list[str]:
+    """Each distinct warning on one line (``RuntimeWarning: invalid value ...``)."""
+    lines: list[str] = []
+    for w in caught:
+        text = " ".join(str(w.message).split())
+        line = f"{w.category.__name__}: {text}" if text else w.category.__name__
+        if line not in lines:
+            lines.append(line)
+    return lines
+
+
+def print_warnings(caught: list[warnings.WarningMessage]) -> None:
+    """Library warnings of a successful command as ``tactile: warning: ...`` lines."""
+    lines = _warning_lines(caught)
+    for line in lines[:MAX_WARNINGS_SHOWN]:
+        print(f"tactile: warning: {line}", file=sys.stderr)
+    if len(lines) > MAX_WARNINGS_SHOWN:
+        print(f"tactile: warning: ... and {len(lines) - MAX_WARNINGS_SHOWN} more",
+              file=sys.stderr)
+
+
+def _with_warnings(message: str, caught: list[warnings.WarningMessage]) -> str:
+    """An error line with the first library warning raised before it, as its context."""
+    lines = _warning_lines(caught)
+    if not lines:
+        return message
+    more = f" and {len(lines) - 1} more" if len(lines) > 1 else ""
+    return f"{message} (after the warning {lines[0]!r}{more})"
+
+
 def _on_signal(signum, frame) -> None:  # noqa: ARG001
     # The first signal only marks the request: the writer stops at its next chunk, frame or
     # stream (raising here could land in a garbage-collection callback, which swallows it
@@ -109,20 +144,29 @@ def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = Non
     (tests/cli/test_errors.py checks that every flag there is an option of the command).
     An argument missing from the table is printed as the library wrote it (a Python name
     in backticks): less familiar on the command line, never wrong.
+
+    Library warnings (numpy, pandas, h5py, torch) raised during the body are collected, never
+    printed above an error: after success each distinct one is one ``tactile: warning:``
+    line; on an error the first is added to the error line. The warning filters are left as
+    they are (pytest's ``error`` filter still turns them into failures).
     """
     table = {**COMMON_FLAGS, **(flags or {})}
     # SIGINT too: a KeyboardInterrupt that surfaced during interpreter shutdown would make
     # CPython exit by SIGINT instead of with code 130
     previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     interrupt.clear()
-    try:
-        return func()
-    except TactileError as exc:
-        remove_live_temporaries()
-        fail(to_flags(str(exc), table))
-    except (KeyboardInterrupt, Interrupted):
-        remove_live_temporaries()
-        fail("interrupted; no output was written and earlier outputs are intact", EXIT_INTERRUPTED)
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            result = func()
+        except TactileError as exc:
+            remove_live_temporaries()
+            fail(_with_warnings(to_flags(str(exc), table), caught))
+        except (KeyboardInterrupt, Interrupted):
+            remove_live_temporaries()
+            fail("interrupted; no output was written and earlier outputs are intact",
+                 EXIT_INTERRUPTED)
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+    print_warnings(caught)
+    return result

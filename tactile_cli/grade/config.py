@@ -37,7 +37,9 @@ def normalise_grade(name: str) -> str:
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    # NaN and infinities are errors (a universe or a bin of `inf` is never meant)
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
+                              allow_inf_nan=False)
 
 
 class TermConfig(_Strict):
@@ -84,7 +86,8 @@ class VariableConfig(_Strict):
 
 class OutputConfig(VariableConfig):
     resolution: int | None = Field(
-        default=None, description="even points of the output universe (None: continuous)")
+        default=None, le=10_000_000,
+        description="even points of the output universe (None: continuous), at most 10^7")
 
     @field_validator("resolution")
     @classmethod
@@ -112,8 +115,8 @@ class FeatureConfig(_Strict):
     @field_validator("bin_s")
     @classmethod
     def _bin(cls, value: float) -> float:
-        if not value > 0:
-            raise ValueError(f"bin_s must be > 0, got {value}")
+        if not 0 < value <= 3600:
+            raise ValueError(f"bin_s must be > 0 and at most 3600 s, got {value}")
         return value
 
 
@@ -125,7 +128,7 @@ class GraderConfig(_Strict):
     input: VariableConfig
     output: OutputConfig
     rules: list[RuleConfig]
-    levels_per_grade: int = 2
+    levels_per_grade: int = Field(default=2, ge=1, le=1000)
     feature: FeatureConfig = FeatureConfig()
     provenance: dict[str, Any] | None = None
 

@@ -26,6 +26,7 @@ fitted gain is the better force measure. A trial whose fit did not converge gets
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from ..config_file import missing_file_error, read_text
 from ..errors import InputError
 from ..store.trials import TactileFile, Trial, is_hdf5
 from ..vocabulary import BIN_S
@@ -80,7 +82,7 @@ def load_areas(paths: list[Path], *, bin_s: float = BIN_S, region: str = "press"
     for path in paths:
         path = Path(path)
         if not path.exists():
-            raise InputError("file not found", path=path)
+            raise missing_file_error(path)
         if path.suffix.lower() == ".csv":
             out.extend(read_area_csv(path))
         elif is_hdf5(path) and kind == "fos_alpha":
@@ -98,12 +100,12 @@ def read_area_csv(path: str | Path) -> list[TrialArea]:
     """Rows ``trial,area[,level]`` under a header naming those columns (``level`` may also
     be called ``force_level`` or ``force_grade``)."""
     path = Path(path)
+    reader = csv.reader(io.StringIO(read_text(path, "CSV file"), newline=""), strict=True)
     try:
-        f = open(path, newline="", encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read ({exc.__class__.__name__}: {exc})", path=path) from None
-    with f:
-        rows = list(csv.reader(f))
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV ({exc})", path=path,
+                         where=f"line {reader.line_num}") from None
     if not rows:
         raise InputError("empty file; expected a header trial,area[,level]", path=path)
     header = [c.strip().lower() for c in rows[0]]

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..config_file import missing_file_error
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter
@@ -118,7 +119,7 @@ def ingest(
         raise InputError("no input files given")
     for path in paths:
         if not path.exists():
-            raise InputError("file not found", path=path)
+            raise missing_file_error(path)
     fmt = detect_format(paths, options)
     # the sidecars are small: check them before the (possibly long) ingest of the data
     from .sidecars import apply_sidecars, read_annotations, read_trial_labels

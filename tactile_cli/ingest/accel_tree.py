@@ -13,6 +13,11 @@ Columns, taken by position (the public dataset's header names are not known): ::
 
     L_x, L_y, L_z, R_x, R_y, R_z, v_slip, v_slide
 
+A header name that names one of these columns (``slip_v``, ``acc_l_x``, ``Right_Z``: "slip" or
+"slide", or a side ``l``/``left``/``r``/``right`` and an axis) must sit at that column's
+position; a header with ``slide_v`` where ``v_slip`` belongs is refused, naming both, rather
+than read with the velocities swapped. Names that name none of them are taken by position.
+
 - six accelerations of the left (L) and right (R) fingertip accelerometers, which the
   paper scaled from [-5 g, 5 g] to [-1, 1] (sec. 4). They are stored as written, in the
   unit :data:`ACCEL_UNIT` = ``"fs5g"``: a fraction of the +-5 g full scale, so
@@ -39,10 +44,12 @@ speeds ``|v_slip|`` and ``|v_slide|``:
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
+from ..config_file import decode_utf8, os_error
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter
@@ -103,10 +110,41 @@ def find_accel_csvs(root: Path) -> list[tuple[Path, str, str, str]]:
     return sorted(found, key=lambda f: natural_key(f[0]))
 
 
+def _column_role(name: str) -> str | None:
+    """The column of :data:`COLUMNS` a header name names (``"slip_v"`` -> ``"v_slip"``,
+    ``"acc_l_x"`` -> ``"L_x"``), or None when it names none of them."""
+    tokens = re.findall(r"[a-z]+|[0-9]+", name.lower())
+    joined = "".join(tokens)
+    if ("slip" in joined) != ("slide" in joined):
+        return "v_slip" if "slip" in joined else "v_slide"
+    if not tokens:
+        return None
+    last = re.fullmatch(r"(l|left|r|right)?([xyz])", tokens[-1])
+    if last is None:
+        return None
+    side = last[1] or next((t for t in reversed(tokens[:-1]) if t in ("l", "left", "r", "right")),
+                           None)
+    return None if side is None else f"{side[0].upper()}_{last[2]}"
+
+
+def _check_header(names: list[str], path: Path) -> None:
+    """Refuse a header whose names put a known column at another column's position."""
+    for i, (name, expected) in enumerate(zip(names, COLUMNS, strict=False)):
+        role = _column_role(name)
+        if role is not None and role != expected:
+            raise InputError(
+                f"header column {i + 1} is {name!r} ({role}), but column {i + 1} must be "
+                f"{expected}: columns are read by position ({', '.join(COLUMNS)}); put the "
+                "columns in this order", path=path, where="line 1")
+
+
 def _dialect(path: Path) -> CsvDialect:
     """Header or not, from the first line: 8 numbers are data."""
-    with open(path, "rb") as f:
-        first = f.readline().decode("utf-8-sig", errors="replace").strip()
+    try:
+        with open(path, "rb") as f:
+            first = decode_utf8(f.readline(), path).strip()
+    except OSError as exc:
+        raise os_error(exc, path, "CSV file") from None
     fields = first.split(",")
     if len(fields) != len(COLUMNS):
         raise InputError(f"first line has {len(fields)} fields, expected {len(COLUMNS)} "
@@ -145,6 +183,7 @@ def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOp
     for path, obj, orientation, speed in files:
         dialect = _dialect(path)
         names = read_csv_header(path, dialect)  # COLUMNS when there is no header
+        _check_header(names, path)
         table = read_csv_table(path, dialect, numeric=names)
         values = np.column_stack([table.columns[n] for n in names])  # (n, 8) by position
         t_s = np.arange(table.n_rows, dtype=np.float64) / sample_rate_hz

@@ -53,6 +53,7 @@ from typing import NoReturn
 
 import numpy as np
 
+from ..config_file import decode_utf8
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter, TrialWriter, safe_name
@@ -256,7 +257,7 @@ def _read_header(f: io.BufferedReader, path: Path) -> list[str]:
     raw = f.readline(_MAX_LINE_BYTES)
     if not raw:
         raise InputError("file is empty; expected a header line naming t, x, y, p", path=path)
-    text = raw.decode("utf-8-sig", errors="replace").rstrip("\r\n")
+    text = decode_utf8(raw, path).rstrip("\r\n")
     names = [c.strip() for c in next(csv.reader([text]))] if text.strip() else []
     missing = [c for c in COLUMNS if c not in names]
     extra = [c for c in names if c not in COLUMNS]
@@ -330,7 +331,7 @@ def _raise_first_bad_line(block: bytes, names: list[str], path: Path, first_line
     """Find the first line of ``block`` that breaks the CSV rules and raise for it."""
     for k, raw_line in enumerate(block.split(b"\n")[:-1]):
         where = f"line {first_line + k}"
-        text = raw_line.decode("utf-8", errors="replace").rstrip("\r")
+        text = decode_utf8(raw_line, path, first_line=first_line + k).rstrip("\r")
         if not text.strip():
             raise InputError("empty line; every line after the header holds one event t,x,y,p",
                              path=path, where=where)

@@ -41,6 +41,7 @@ order, then its reference, then its ``timestamps.csv`` if any).
 from __future__ import annotations
 
 import csv
+import io
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -49,6 +50,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
+from ..config_file import read_text
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter
@@ -197,11 +199,15 @@ def read_timestamps(path: Path, frames: Sequence[Path]) -> FrameTimes:
     ``t_unix_s`` (``file,t_unix_s``); blank lines are skipped.
     """
     rows: list[tuple[int, list[str]]] = []
-    with open(path, newline="", encoding="utf-8-sig") as f:
-        for line_no, row in enumerate(csv.reader(f), start=1):
+    reader = csv.reader(io.StringIO(read_text(path, "timestamps file"), newline=""), strict=True)
+    try:
+        for row in reader:
             cells = [c.strip() for c in row]
             if any(cells):
-                rows.append((line_no, cells))
+                rows.append((reader.line_num, cells))
+    except csv.Error as exc:
+        raise InputError(f"not valid CSV ({exc})", path=path,
+                         where=f"line {reader.line_num}") from None
     if not rows:
         raise InputError("is empty; write one time in seconds per frame (column t_s)", path=path)
     header = [c.lower() for c in rows[0][1]]

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..config_file import decode_utf8, os_error, read_bytes
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter, safe_name
@@ -71,16 +72,16 @@ def read_csv_header(path: Path, dialect: CsvDialect) -> list[str]:
     """The column names of a CSV file: its first line, or ``dialect.column_names``."""
     if not dialect.header:
         return list(dialect.column_names or [])
-    with open(path, "rb") as f:
-        first = f.readline()
+    try:
+        with open(path, "rb") as f:
+            first = f.readline()
+    except OSError as exc:
+        raise os_error(exc, path, "CSV file") from None
     return _header_names(first, path, dialect)
 
 
 def _header_names(first: bytes, path: Path, dialect: CsvDialect) -> list[str]:
-    try:
-        text = first.decode("utf-8-sig").rstrip("\r\n")
-    except UnicodeDecodeError:
-        raise InputError("the header line is not UTF-8 text", path=path, where="line 1") from None
+    text = decode_utf8(first, path).rstrip("\r\n")
     if not text.strip():
         raise InputError("the header line is empty (set `header: false` and `column_names` "
                          "in the mapping if the file has no header)", path=path, where="line 1")
@@ -121,8 +122,10 @@ def read_csv_table(
     with ``trailing_delimiter``); blank lines are allowed only at the end of the file.
     Raises :class:`InputError` naming the file, line and column.
     """
-    raw = path.read_bytes()
+    raw = read_bytes(path, "CSV file")
     buf = np.frombuffer(raw, dtype=np.uint8)
+    if len(buf) and buf.max() >= 0x80:  # not plain ASCII: every byte must be UTF-8
+        decode_utf8(raw, path)
     starts, ends = _line_bounds(buf)
     nonblank = np.flatnonzero(ends > starts)
     if len(nonblank) == 0:

@@ -28,6 +28,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..config_file import read_text
 from ..errors import InputError
 from ..store.writer import StoreWriter, safe_name
 
@@ -54,13 +55,7 @@ class TrialLabels:
 
 def _rows(path: Path, what: str) -> Iterator[tuple[int, list[str]]]:
     """``(line, cells)`` of every line of a CSV file, the header first (line 1)."""
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"{what} file not found", path=path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read the {what} file ({exc.__class__.__name__}: {exc}); "
-                         "save it as UTF-8 CSV", path=path) from None
+    text = read_text(path, f"{what} file")
     lines = text.rstrip("\r\n \t").splitlines()
     if not lines or not lines[0].strip():
         raise InputError(f"{what} file is empty; expected a header line", path=path)

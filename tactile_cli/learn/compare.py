@@ -46,6 +46,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.outdir import check_output_folder, output_folder
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 from .inputs import InputSpec, mismatch
@@ -559,21 +560,22 @@ def comparison_record(cmp: Comparison, *, command: str | None = None) -> dict[st
 
 def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | None = None
                      ) -> ComparisonFiles:
-    """Write compare.png, compare.csv and compare.json into ``out_dir`` (created), each
-    atomically; compare.json is written last, so its presence means the set is complete."""
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` exists and is not a folder", path=out)
-    png = write_atomic(out / COMPARE_PNG, plot_comparison(cmp))
+    """Write compare.png, compare.csv and compare.json into ``out_dir`` (created; other
+    files there are kept): all three are written into a hidden folder beside it and moved
+    in together, so an error or interrupt leaves ``out_dir`` as it was."""
+    out = check_output_folder(out_dir, merge=True)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(TABLE_COLUMNS), lineterminator="\n")
     w.writeheader()
     for row in table_rows(cmp):
         w.writerow({k: "" if v is None else v for k, v in row.items()})
-    csv_path = write_atomic(out / COMPARE_CSV, buf.getvalue())
-    json_path = write_atomic(out / COMPARE_JSON,
-                             runs.dumps(comparison_record(cmp, command=command)) + "\n")
-    return ComparisonFiles(png, csv_path, json_path)
+    # built beside ``out_dir`` and moved in only when all three are written
+    with output_folder(out, merge=True) as tmp:
+        write_atomic(tmp / COMPARE_PNG, plot_comparison(cmp))
+        write_atomic(tmp / COMPARE_CSV, buf.getvalue())
+        write_atomic(tmp / COMPARE_JSON, runs.dumps(comparison_record(cmp, command=command))
+                     + "\n")
+    return ComparisonFiles(out / COMPARE_PNG, out / COMPARE_CSV, out / COMPARE_JSON)
 
 
 __all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "ComparisonFiles",

@@ -22,6 +22,16 @@ unknown keys, and :func:`load_config` turns any problem into one
       split: {mode: auto, val_fraction: 0.2, test_fraction: 0.0}
     model: {family: lstm, hidden: 64, layers: 1}
     optim: {lr: 0.003, batch_size: 256, epochs: 30, patience: 5}
+
+Absurd sizes are refused before any work, with their key and line. Every number must be
+finite, and the sizes have generous upper bounds, far above any real use: ``data.window``,
+``data.stride``, ``optim.batch_size`` and the spectrogram's ``n_fft``/``hop`` at most
+10^7; a layer width (``hidden``, ``channels``, ``head_hidden``) at most 10^5; ``layers`` and
+list lengths at most 1000; ``optim.threads`` at most 1024; ``optim.epochs`` at most 10^6.
+Then the memory a training step needs is estimated from the config alone (the weights with
+their gradients and Adam state, 16 bytes per parameter; the activations of one batch; the
+batch itself) and a config that needs more than this machine's physical memory is refused,
+naming the key that dominates, the estimate and the machine's memory.
 """
 
 from __future__ import annotations
@@ -39,7 +49,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..config_file import key_line, read_yaml
+from ..config_file import check_fits_in_memory, key_line, read_yaml
 from ..errors import InputError
 from ..vocabulary import BIN_S
 
@@ -49,8 +59,17 @@ SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope
 FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp")
 
 
+#: Upper bounds of sizes (see the module docstring): far above any real use, low enough
+#: that a typo (an extra six zeros) is an error and not an allocation that never ends.
+_MAX_SAMPLES = 10_000_000
+_MAX_WIDTH = 100_000
+_MAX_LIST = 1000
+_MAX_SEED = 2**63 - 1
+_Width = Annotated[int, Field(ge=1, le=_MAX_WIDTH)]
+
+
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class TargetConfig(_Model):
@@ -61,7 +80,7 @@ class TargetConfig(_Model):
     (``/trials/{trial}/labels`` attribute) when ``source: trial``."""
     kind: Literal["classification", "regression"] = "classification"
     source: Literal["sample", "trial"] = "sample"
-    weight: float = Field(default=1.0, gt=0)
+    weight: float = Field(default=1.0, gt=0, le=1e6)
     """Factor of this head's loss in the total (paper 001, eq. 3 uses 1 for every head)."""
 
 
@@ -74,7 +93,7 @@ class SplitConfig(_Model):
     random when none has."""
     val_fraction: float = Field(default=0.2, ge=0, lt=1)
     test_fraction: float = Field(default=0.0, ge=0, lt=1)
-    seed: int | None = None
+    seed: int | None = Field(default=None, ge=0, le=_MAX_SEED)
     """Seed of the random split; default the run's ``seed``."""
 
     @model_validator(mode="after")
@@ -93,11 +112,11 @@ class DataConfig(_Model):
     stream: str = Field(min_length=1)
     """Signal stream of every trial. ``event_counts`` is also computed on the fly from a
     trial's events (bins of ``bin_s``) when the trial has no such stream."""
-    channels: list[str] = Field(min_length=1)
+    channels: list[str] = Field(min_length=1, max_length=_MAX_LIST)
     """Channel names of the stream's sensor, in the order the model sees them."""
-    window: int = Field(ge=1)
+    window: int = Field(ge=1, le=_MAX_SAMPLES)
     """Samples per window."""
-    stride: int = Field(default=1, ge=1)
+    stride: int = Field(default=1, ge=1, le=_MAX_SAMPLES)
     """Samples between the ends of consecutive windows."""
     pad: Literal["none", "zero", "edge"] = "none"
     """Left padding of each trial by ``window - 1`` samples so that every sample can end a
@@ -108,12 +127,12 @@ class DataConfig(_Model):
     ``label_delay``), what a real-time user gets; or the most frequent label in the window
     (ties go to the lower class index). Regression sample labels: the last value or the
     window mean."""
-    label_delay: int = Field(default=0, ge=0)
+    label_delay: int = Field(default=0, ge=0, le=_MAX_SAMPLES)
     """With ``last``: the target is the label ``label_delay`` samples before the window's
     end, so the decision for a sample is made after that many later samples (a latency of
     ``label_delay`` samples that lets the model see a transition's first samples)."""
-    targets: list[TargetConfig] = Field(min_length=1)
-    bin_s: float = Field(default=BIN_S, gt=0)
+    targets: list[TargetConfig] = Field(min_length=1, max_length=_MAX_LIST)
+    bin_s: float = Field(default=BIN_S, gt=0, le=3600)
     """Bin width (s) of event counts computed on the fly from events."""
     transform: Literal["none", "signed_log1p"] = "none"
     """Applied to every sample before normalisation: ``signed_log1p`` is
@@ -124,7 +143,7 @@ class DataConfig(_Model):
     class_weights: bool = True
     """Weight each classification loss by inverse class frequency in the training split."""
     split: SplitConfig = SplitConfig()
-    boundary_margin: int = Field(default=1, ge=0)
+    boundary_margin: int = Field(default=1, ge=0, le=_MAX_SAMPLES)
     """Evaluation also reports accuracy without the windows whose target sample is within
     this many samples of a change of its sample label."""
 
@@ -147,7 +166,7 @@ class DataConfig(_Model):
 
 class _Family(_Model):
     dropout: float = Field(default=0.0, ge=0, lt=1)
-    head_hidden: list[Annotated[int, Field(ge=1)]] = []
+    head_hidden: list[_Width] = Field(default=[], max_length=_MAX_LIST)
     """Hidden fully connected layers of each head before its output layer (paper 001 uses
     two per task); empty: the trunk's features go straight to one linear output layer."""
 
@@ -163,18 +182,18 @@ class LstmConfig(_Family):
     one LSTM layer, a fully connected layer, softmax)."""
 
     family: Literal["lstm"]
-    hidden: int = Field(default=64, ge=1)
-    layers: int = Field(default=1, ge=1)
+    hidden: int = Field(default=64, ge=1, le=_MAX_WIDTH)
+    layers: int = Field(default=1, ge=1, le=_MAX_LIST)
 
 
 class Cnn1dConfig(_Family):
     """1-D convolutions over time (channels as input channels), flattened into the heads."""
 
     family: Literal["cnn1d"]
-    channels: list[Annotated[int, Field(ge=1)]] = Field(default=[32, 32], min_length=1)
-    kernel: int = Field(default=5, ge=1)
+    channels: list[_Width] = Field(default=[32, 32], min_length=1, max_length=_MAX_LIST)
+    kernel: int = Field(default=5, ge=1, le=_MAX_SAMPLES)
     """Samples; odd, so that 'same' padding centres it."""
-    pool: int = Field(default=2, ge=1)
+    pool: int = Field(default=2, ge=1, le=_MAX_SAMPLES)
     """Max-pool factor after each convolution (skipped when the sequence is too short)."""
 
     _odd = field_validator("kernel")(_odd_kernel)
@@ -185,10 +204,10 @@ class Cnn2dSpectrogramConfig(_Family):
     channels as image channels (paper 001, sec. 5.3)."""
 
     family: Literal["cnn2d_spectrogram"]
-    n_fft: int = Field(default=16, ge=2)
-    hop: int = Field(default=4, ge=1)
-    channels: list[Annotated[int, Field(ge=1)]] = Field(default=[16, 32], min_length=1)
-    kernel: int = Field(default=3, ge=1)
+    n_fft: int = Field(default=16, ge=2, le=_MAX_SAMPLES)
+    hop: int = Field(default=4, ge=1, le=_MAX_SAMPLES)
+    channels: list[_Width] = Field(default=[16, 32], min_length=1, max_length=_MAX_LIST)
+    kernel: int = Field(default=3, ge=1, le=_MAX_WIDTH)
     """Odd, so that 'same' padding centres it."""
 
     _odd = field_validator("kernel")(_odd_kernel)
@@ -198,14 +217,14 @@ class FnnConfig(_Family):
     """Fully connected network on the flattened window (paper 001, sec. 5.1)."""
 
     family: Literal["fnn"]
-    hidden: list[Annotated[int, Field(ge=1)]] = Field(default=[128, 64], min_length=1)
+    hidden: list[_Width] = Field(default=[128, 64], min_length=1, max_length=_MAX_LIST)
 
 
 class MlpConfig(_Family):
     """Fully connected network on summary features of the window (per channel)."""
 
     family: Literal["mlp"]
-    hidden: list[Annotated[int, Field(ge=1)]] = Field(default=[64, 64], min_length=1)
+    hidden: list[_Width] = Field(default=[64, 64], min_length=1, max_length=_MAX_LIST)
     features: list[Literal["mean", "std", "min", "max", "last", "slope"]] = Field(
         default=list(SUMMARY_FEATURES), min_length=1
     )
@@ -228,15 +247,15 @@ class OptimConfig(_Model):
     lr_schedule: Literal["constant", "cosine"] = "constant"
     """``cosine``: the learning rate falls from ``lr`` to 0 over ``epochs`` (cosine
     annealing, stepped per epoch), which settles the weights for precise boundaries."""
-    batch_size: int = Field(default=256, ge=1)
-    epochs: int = Field(default=30, ge=1)
-    patience: int = Field(default=5, ge=0)
+    batch_size: int = Field(default=256, ge=1, le=_MAX_SAMPLES)
+    epochs: int = Field(default=30, ge=1, le=1_000_000)
+    patience: int = Field(default=5, ge=0, le=1_000_000)
     """Stop after this many epochs without improvement of ``monitor`` on the validation
     split and keep the best epoch's weights; 0 trains every epoch (and keeps the best)."""
     monitor: Literal["val_loss", "val_accuracy"] = "val_loss"
     grad_clip: float = Field(default=0.0, ge=0)
     """Clip the gradient's global norm to this value before each step; 0: no clipping."""
-    threads: int = Field(default=1, ge=1)
+    threads: int = Field(default=1, ge=1, le=1024)
     """torch CPU threads during training. One is fastest for the small networks here (an
     LSTM step of batch 256 took 26 ms on 1 thread and 64 ms on 2 of this machine's busy 2
     cores) and keeps results independent of the machine's core count; raise it for large
@@ -247,7 +266,7 @@ class TrainConfig(_Model):
     """A whole ``tactile train`` config."""
 
     version: Literal[1] = 1
-    seed: int = 0
+    seed: int = Field(default=0, ge=0, le=_MAX_SEED)
     data: DataConfig
     model: ModelConfig
     optim: OptimConfig = OptimConfig()
@@ -292,7 +311,7 @@ def parse_config(raw: Any, *, path: str | Path | None = None, text: str | None =
                          "optionally version, seed, optim); see configs/train_lstm_actions.yaml",
                          path=path)
     try:
-        return TrainConfig.model_validate(raw)
+        config = TrainConfig.model_validate(raw)
     except ValidationError as exc:
         errors = exc.errors()
         # an unknown key first: a misspelt key also makes the intended one "missing"
@@ -301,6 +320,65 @@ def parse_config(raw: Any, *, path: str | Path | None = None, text: str | None =
         line = key_line(text, keys) if text and keys else None
         raise InputError(_describe(err, keys), path=path,
                          where=None if line is None else f"line {line}") from None
+    needed, key, purpose, keys = memory_estimate(config)
+    check_fits_in_memory(needed, key, purpose, path=path, text=text, keys=keys)
+    return config
+
+
+def _widest(candidates: list[tuple[tuple[Any, ...], int]]) -> tuple[tuple[Any, ...], int]:
+    return max(candidates, key=lambda c: c[1])
+
+
+def memory_estimate(cfg: TrainConfig) -> tuple[float, str, str, tuple[Any, ...]]:
+    """``(bytes, key, purpose, keys)``: a lower estimate of the memory one training step of
+    ``cfg`` needs (weights with gradients and Adam state at 16 bytes per parameter, one
+    batch's activations and the batch); the key that dominates it, with its value
+    (``"`model.hidden` (=64)"``), what the largest part is for, and the key's location."""
+    d, m, o = cfg.data, cfg.model, cfg.optim
+    c, w, b = len(d.channels), d.window, o.batch_size
+    sizes: list[tuple[tuple[Any, ...], int]] = [(("data", "window"), w)]
+    if isinstance(m, LstmConfig):
+        h = m.hidden
+        params = 4 * (c * h + h * h + 2 * h) + (m.layers - 1) * 4 * (2 * h * h + 2 * h)
+        acts = 6 * b * w * h * m.layers
+        sizes += [(("model", "hidden"), h), (("model", "layers"), m.layers)]
+        out = h
+    elif isinstance(m, FnnConfig | MlpConfig):
+        widths = [w * c if isinstance(m, FnnConfig) else len(m.features) * c, *m.hidden]
+        params = sum(a * b_ for a, b_ in zip(widths, widths[1:], strict=False))
+        acts = 2 * b * sum(m.hidden)
+        sizes += [(("model", "hidden", i), v) for i, v in enumerate(m.hidden)]
+        out = m.hidden[-1]
+    elif isinstance(m, Cnn1dConfig):
+        chans = [c, *m.channels]
+        params = sum(a * b_ * m.kernel for a, b_ in zip(chans, chans[1:], strict=False))
+        acts = 2 * b * w * sum(m.channels)
+        sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
+        sizes.append((("model", "kernel"), m.kernel))
+        out = m.channels[-1] * max(1, w // m.pool ** len(m.channels))
+    else:  # the spectrogram CNN
+        cells = (m.n_fft // 2 + 1) * (w // m.hop + 1)
+        chans = [c, *m.channels]
+        params = sum(a * b_ * m.kernel ** 2 for a, b_ in zip(chans, chans[1:], strict=False))
+        acts = 2 * b * cells * sum(m.channels)
+        sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
+        sizes += [(("model", "kernel"), m.kernel), (("model", "n_fft"), m.n_fft)]
+        out = m.channels[-1] * cells
+    head = [out, *m.head_hidden, 1]
+    params += len(d.targets) * sum(a * b_ for a, b_ in zip(head, head[1:], strict=False))
+    sizes += [(("model", "head_hidden", i), v) for i, v in enumerate(m.head_hidden)]
+    terms = [
+        (16.0 * params, f"for the model's {params:.3g} weights (with their gradients and "
+         "optimiser state)", sizes),
+        (4.0 * acts, f"for the activations of a batch of {b} windows",
+         [*sizes, (("optim", "batch_size"), b)]),
+        (4.0 * b * w * c, f"for a batch of {b} windows of {w} samples x {c} channels",
+         [(("data", "window"), w), (("optim", "batch_size"), b)]),
+    ]
+    needed = sum(t[0] for t in terms)
+    _, purpose, candidates = max(terms, key=lambda t: t[0])
+    keys, value = _widest(candidates)
+    return needed, f"`{_key_path(keys)}` (={value})", purpose, keys
 
 
 def _keys_in_file(loc: tuple[Any, ...], raw: Any, *, missing: bool) -> tuple[Any, ...]:

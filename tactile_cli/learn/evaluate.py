@@ -33,6 +33,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.outdir import check_output_folder
 from ..store.reader import recording_hashes
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
@@ -239,6 +240,9 @@ def evaluate(
     paths = data_files(data_paths)
     if split not in ("all", "test"):
         raise InputError(f"`split` must be all or test, got {split!r}")
+    # a file at RUN/eval or RUN/eval/<name> is refused before any work
+    check_output_folder(run.path / runs.EVAL_DIR / (name or runs.eval_dir_name(paths, split)),
+                        overwrite=True)
     cfg = run.config
     trials = read_trials(paths, cfg.data, trained=True)
     spec, notes = checked_input(trials, cfg.data.stream, run.input, run.path)

@@ -60,6 +60,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.outdir import check_output_folder, output_folder
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 
@@ -529,6 +530,9 @@ def perturb_evaluate(
         raise InputError(f"`threshold` must be an accuracy in [0, 1], got {threshold}")
     if not 0 < relative_threshold <= 1:
         raise InputError(f"relative threshold must be in (0, 1], got {relative_threshold}")
+    if write:  # a file at RUN/perturb or RUN/perturb/<name> is refused before any work
+        check_output_folder(run_obj.path / PERTURB_DIR
+                            / (name or runs.eval_dir_name(paths, split)), overwrite=True)
     cfg = run_obj.config
     head = primary_head(run_obj.heads)
     if head is None:
@@ -672,14 +676,11 @@ def write_perturbation(result: PerturbResult, out_dir: str | Path) -> Path:
 def write_perturbation_set(results: Sequence[PerturbResult], out_dir: str | Path, *,
                            command: str | None = None) -> dict[str, Path]:
     """The comparison of several runs in ``out_dir``: perturb.png (one line per run),
-    perturb.csv and perturb.json (every result and the provenance), each atomic."""
+    perturb.csv and perturb.json (every result and the provenance), moved in together
+    from a hidden folder beside it (other files in ``out_dir`` are kept)."""
     from .compare import write_atomic
 
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` exists and is not a folder", path=out)
-    png = write_atomic(out / PERTURB_PNG, plot_perturbations(results))
-    csv_path = write_atomic(out / PERTURB_CSV, _csv_text(perturbation_rows(results)))
+    out = check_output_folder(out_dir, merge=True)
     record = {
         "format": "tactile-perturb-set", "format_version": 1, "tool_version": __version__,
         "created_utc": utc_now(),
@@ -689,8 +690,12 @@ def write_perturbation_set(results: Sequence[PerturbResult], out_dir: str | Path
                    for r in results],
         "results": [r.as_dict() for r in results],
     }
-    json_path = write_atomic(out / PERTURB_JSON, runs.dumps(record) + "\n")
-    return {"png": png, "csv": csv_path, "json": json_path}
+    # built beside ``out_dir`` and moved in only when all three are written
+    with output_folder(out, merge=True) as tmp:
+        write_atomic(tmp / PERTURB_PNG, plot_perturbations(results))
+        write_atomic(tmp / PERTURB_CSV, _csv_text(perturbation_rows(results)))
+        write_atomic(tmp / PERTURB_JSON, runs.dumps(record) + "\n")
+    return {"png": out / PERTURB_PNG, "csv": out / PERTURB_CSV, "json": out / PERTURB_JSON}
 
 
 def plot_perturbations(results: Sequence[PerturbResult]) -> bytes:

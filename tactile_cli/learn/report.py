@@ -36,6 +36,7 @@ import yaml
 
 from .._version import __version__
 from ..errors import InputError, TactileError
+from ..store.outdir import check_output_folder, output_folder
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 from .compare import (
@@ -416,9 +417,7 @@ def build_report(
     for p in figs:
         if not p.is_dir():
             raise InputError("figure folder not found (`figure_dirs` takes folders)", path=p)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` exists and is not a folder", path=out)
+    out = check_output_folder(out_dir, merge=True)  # added to; a file there is refused
 
     inputs = _Inputs()
     notes: list[str] = []
@@ -475,7 +474,7 @@ def build_report(
             f"<title>{_e(heading)}</title><style>{_CSS}</style></head><body>"
             + "\n".join(body) + "</body></html>\n")
 
-    index = write_atomic(out / INDEX_HTML, page)
+    index = out / INDEX_HTML
     record = {
         "format": "tactile-report", "format_version": 1, "tool_version": __version__,
         "created_utc": created, "command": cmd, "index": str(index),
@@ -483,7 +482,10 @@ def build_report(
         "data": [str(p) for p in datas], "figure_dirs": [str(p) for p in figs],
         "notes": notes, "inputs": inputs.items,
     }
-    prov = write_atomic(out / REPORT_JSON, runs.dumps(record) + "\n")
+    prov = out / REPORT_JSON
+    with output_folder(out, merge=True) as tmp:  # both files moved in together
+        write_atomic(tmp / INDEX_HTML, page)
+        write_atomic(tmp / REPORT_JSON, runs.dumps(record) + "\n")
     return ReportResult(index, prov, [str(d) for d in dirs], compared, perturbed,
                         [str(p) for p in datas], fig_names, notes)
 

@@ -27,18 +27,18 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
-import yaml
 
 from .._version import __version__
+from ..config_file import missing_file_error, parse_yaml, read_text
 from ..errors import InputError
+from ..store.outdir import output_folder
 from .config import TrainConfig, parse_config
 from .data import Normalisation
 from .heads import HeadSpec
@@ -65,45 +65,15 @@ PREDICTIONS_CSV = "predictions.csv"
 def write_folder(out: Path, fill: Callable[[Path], None], *, overwrite: bool) -> Path:
     """Create folder ``out`` atomically: ``fill(tmp)`` writes into a temporary sibling,
     which is then renamed to ``out`` (an existing ``out`` is replaced only when
-    ``overwrite``; otherwise that is an error raised before anything is written)."""
+    ``overwrite``; otherwise that is an error raised before anything is written; a file at
+    ``out`` or at one of its parents is an error either way). See
+    :func:`tactile_cli.store.outdir.output_folder`."""
     out = Path(out)
-    if out.exists() and not overwrite:
+    if out.exists() and out.is_dir() and not overwrite:
         raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
-    if out.exists() and not out.is_dir():
-        raise InputError("output exists and is not a folder", path=out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale(out)
-    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    tmp.mkdir()
-    try:
+    with output_folder(out, overwrite=overwrite) as tmp:
         fill(tmp)
-        old = None
-        if out.exists():
-            old = out.with_name(f".{out.name}.old-{os.getpid()}")
-            os.replace(out, old)
-        os.replace(tmp, out)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return out
-
-
-def _remove_stale(out: Path) -> None:
-    """Delete temporary siblings of ``out`` left by killed writers (their pid is gone)."""
-    for tmp in out.parent.glob(f".{out.name}.*-*"):
-        kind, _, pid = tmp.name.rpartition("-")
-        if not (pid.isdigit() and kind.endswith((".tmp", ".old"))):
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
-            shutil.rmtree(tmp, ignore_errors=True)
-        except PermissionError:  # alive, someone else's
-            pass
 
 
 def json_safe(obj: Any) -> Any:
@@ -144,37 +114,156 @@ class Run:
         d = self.config.data
         model = build_model(self.config.model, window=d.window, n_channels=len(d.channels),
                             heads=self.heads)
+        weights = self.path / MODEL_PT
         try:
-            state = torch.load(self.path / MODEL_PT, map_location="cpu", weights_only=True)
+            state = torch.load(weights, map_location="cpu", weights_only=True)
         except FileNotFoundError:
-            raise InputError("run folder has no model.pt; re-run `tactile train`",
-                             path=self.path) from None
-        except Exception as exc:  # a corrupt or foreign file: say which
-            raise InputError(f"cannot load model.pt ({exc.__class__.__name__}: {exc})",
-                             path=self.path / MODEL_PT) from None
+            raise InputError(f"run folder has no model.pt; {_RETRAIN}", path=self.path) from None
+        except Exception as exc:  # random bytes, a cut file, a foreign pickle: say which
+            raise InputError(f"model.pt cannot be loaded ({_first_line(exc)}); the file is "
+                             f"damaged: {_RETRAIN}", path=weights) from None
+        if not isinstance(state, dict) or not all(
+                isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in state.items()):
+            raise InputError(f"model.pt holds no state dict of named tensors; {_RETRAIN}",
+                             path=weights)
+        bad = next((k for k, v in state.items()
+                    if v.is_floating_point() and not bool(torch.isfinite(v).all())), None)
+        if bad is not None:
+            raise InputError(f"weight {bad!r} holds NaN or infinite values; {_RETRAIN}",
+                             path=weights)
         try:
             model.load_state_dict(state)
-        except RuntimeError as exc:
-            first = str(exc).splitlines()[0]
-            raise InputError(f"model.pt does not fit the run's config ({first}); re-run "
-                             "`tactile train`", path=self.path / MODEL_PT) from None
+        except (RuntimeError, TypeError, ValueError, KeyError) as exc:
+            raise InputError(f"model.pt does not fit the run's config ({_first_line(exc)}); "
+                             f"{_RETRAIN}", path=weights) from None
         return model.eval()
 
 
+#: What to do about a damaged run folder.
+_RETRAIN = "re-create the run with `tactile train`"
+
+
+def _first_line(exc: BaseException) -> str:
+    """The exception's first sentence (torch's load errors go on with advice that does not
+    apply here, such as `weights_only=False`)."""
+    text = " ".join(str(exc).split("\n")[0].split()).split(". ")[0].rstrip(".")
+    return f"{exc.__class__.__name__}: {text}" if text else exc.__class__.__name__
+
+
+def _read_json(path: Path, run: Path) -> Any:
+    """The parsed JSON of a run folder's file; a missing, unreadable or cut file is one
+    InputError naming it."""
+    if not path.exists():
+        if path.is_symlink() or not run.joinpath(RUN_JSON).exists():
+            raise missing_file_error(path)
+        raise InputError(f"run folder has no {path.name}; {_RETRAIN}", path=run)
+    try:
+        return json.loads(read_text(path, advice=f"the file is damaged: {_RETRAIN}"))
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}): the file is damaged or cut; {_RETRAIN}",
+                         path=path, where=f"line {exc.lineno}, column {exc.colno}") from None
+    except (ValueError, RecursionError) as exc:
+        raise InputError(f"not valid JSON ({_first_line(exc)}); {_RETRAIN}", path=path) from None
+
+
+def _finite_list(value: Any, key: str, n: int | None, path: Path, *,
+                 positive: bool = False) -> np.ndarray:
+    """``value`` as a (n,) float64 array of finite numbers (> 0 with ``positive``)."""
+    if not isinstance(value, list) or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        raise InputError(f"`{key}` must be a list of numbers; {_RETRAIN}", path=path)
+    arr = np.asarray(value, dtype=np.float64)
+    if n is not None and len(arr) != n:
+        raise InputError(f"`{key}` holds {len(arr)} values for {n} channels; {_RETRAIN}",
+                         path=path)
+    bad = np.flatnonzero(~np.isfinite(arr) | ((arr <= 0) if positive else False))
+    if len(bad):
+        need = "finite and positive" if positive else "finite"
+        raise InputError(f"`{key}[{int(bad[0])}]` (={arr[bad[0]]}) must be {need} (a zero "
+                         f"std would divide by zero); {_RETRAIN}" if positive else
+                         f"`{key}[{int(bad[0])}]` (={arr[bad[0]]}) must be {need}; {_RETRAIN}",
+                         path=path)
+    return arr
+
+
+def _normalisation(raw: Any, channels: list[str], path: Path) -> Normalisation:
+    """normalisation.json checked: a record per channel of the config, finite means and
+    positive finite stds (evaluation divides by them)."""
+    if not isinstance(raw, dict):
+        raise InputError(f"not a normalisation record (a JSON object); {_RETRAIN}", path=path)
+    missing = [k for k in ("channels", "mean", "std", "n_samples", "enabled", "transform",
+                           "targets") if k not in raw]
+    if missing:
+        raise InputError(f"key `{missing[0]}` is missing; {_RETRAIN}", path=path)
+    if raw["channels"] != list(channels):
+        raise InputError(f"`channels` (={raw['channels']!r}) differ from the config's "
+                         f"data.channels {list(channels)!r}; {_RETRAIN}", path=path)
+    mean = _finite_list(raw["mean"], "mean", len(channels), path)
+    std = _finite_list(raw["std"], "std", len(channels), path, positive=True)
+    if not isinstance(raw["enabled"], bool):
+        raise InputError(f"`enabled` must be true or false; {_RETRAIN}", path=path)
+    if raw["transform"] not in ("none", "signed_log1p"):
+        raise InputError(f"`transform` (={raw['transform']!r}) must be none or signed_log1p; "
+                         f"{_RETRAIN}", path=path)
+    n = raw["n_samples"]
+    if not isinstance(n, int) or isinstance(n, bool) or n < 0:
+        raise InputError(f"`n_samples` (={n!r}) must be a non-negative integer; {_RETRAIN}",
+                         path=path)
+    targets = raw["targets"]
+    if not isinstance(targets, dict) or not all(
+            isinstance(v, dict) and {"mean", "std"} <= v.keys() for v in targets.values()):
+        raise InputError(f"`targets` must map each regression head to its mean and std; "
+                         f"{_RETRAIN}", path=path)
+    checked = {}
+    for name, v in targets.items():
+        m = _finite_list([v["mean"]], f"targets.{name}.mean", 1, path)
+        sd = _finite_list([v["std"]], f"targets.{name}.std", 1, path, positive=True)
+        checked[name] = (float(m[0]), float(sd[0]))
+    features = raw.get("features")
+    if features is not None and not isinstance(features, dict):
+        raise InputError(f"`features` must be a JSON object or null; {_RETRAIN}", path=path)
+    return Normalisation(list(channels), mean, std, n, raw["enabled"], raw["transform"],
+                         checked, features)
+
+
+def _heads(raw: Any, path: Path) -> list[HeadSpec]:
+    if not isinstance(raw, list) or not raw:
+        raise InputError(f"`heads` must be a non-empty list; {_RETRAIN}", path=path)
+    heads = []
+    for i, h in enumerate(raw):
+        try:
+            head = HeadSpec.from_dict(h)
+            ok = (head.kind in ("classification", "regression")
+                  and head.source in ("sample", "trial") and math.isfinite(head.weight)
+                  and (head.kind == "regression" or len(head.classes) >= 1))
+        except (KeyError, TypeError, ValueError, AttributeError):
+            ok = False
+        if not ok:
+            raise InputError(f"`heads[{i}]` is not a valid head record (name, kind, source, "
+                             f"weight, classes); {_RETRAIN}", path=path)
+        heads.append(head)
+    return heads
+
+
 def load_run(path: str | Path) -> Run:
-    """Read a run folder; errors name the file and the command that re-creates it."""
+    """Read a run folder, checking every file before use (format and version, keys and their
+    types, finite normalisation); errors name the file and the command that re-creates it."""
     path = Path(path)
-    if not path.is_dir():
+    if not path.exists():
+        if path.is_symlink():
+            raise missing_file_error(path, "run folder")
         raise InputError("run folder not found (give the folder `tactile train` wrote)",
                          path=path)
+    if not path.is_dir():
+        raise InputError("not a run folder but a file (give the folder `tactile train` wrote)",
+                         path=path)
     info_path = path / RUN_JSON
-    try:
-        info = json.loads(info_path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
+    if not info_path.exists() and not info_path.is_symlink():
         raise InputError("not a run folder (no run.json); train one with `tactile train`",
-                         path=path) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"run.json is not valid JSON ({exc})", path=info_path) from None
+                         path=path)
+    info = _read_json(info_path, path)
+    if not isinstance(info, dict):
+        raise InputError(f"run.json is not a JSON object; {_RETRAIN}", path=info_path)
     if info.get("format") != RUN_FORMAT:
         raise InputError(f"run.json format is {info.get('format')!r}, not {RUN_FORMAT!r}",
                          path=info_path)
@@ -182,18 +271,25 @@ def load_run(path: str | Path) -> Run:
         raise InputError(f"run folder format version {info.get('format_version')} cannot be "
                          f"read by tactile {__version__} (reads {RUN_FORMAT_VERSION}); "
                          "re-create it with this version's `tactile train`", path=info_path)
+    if "heads" not in info:
+        raise InputError(f"run.json has no `heads`; {_RETRAIN}", path=info_path)
+    data = info.get("data", [])
+    if not isinstance(data, list) or not all(
+            isinstance(d, dict) and isinstance(d.get("sha256"), str) for d in data):
+        raise InputError(f"`data` must list the training files with their sha256; {_RETRAIN}",
+                         path=info_path)
     cfg_path = path / CONFIG_YAML
+    if not cfg_path.exists() and not cfg_path.is_symlink():
+        raise InputError(f"run folder has no config.resolved.yaml; {_RETRAIN}", path=path)
+    text = read_text(cfg_path, "config file", advice=f"the file is damaged: {_RETRAIN}")
     try:
-        raw = yaml.safe_load(cfg_path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError("run folder has no config.resolved.yaml", path=path) from None
-    config = parse_config(raw, path=cfg_path)
-    try:
-        norm = Normalisation.from_dict(
-            json.loads((path / NORMALISATION_JSON).read_text(encoding="utf-8")))
-    except FileNotFoundError:
-        raise InputError("run folder has no normalisation.json", path=path) from None
-    heads = [HeadSpec.from_dict(h) for h in info["heads"]]
+        config = parse_config(parse_yaml(text, cfg_path), path=cfg_path, text=text)
+    except InputError as exc:
+        raise InputError(f"{exc.message}; the run folder is damaged: {_RETRAIN}",
+                         path=exc.path, where=exc.where) from None
+    norm = _normalisation(_read_json(path / NORMALISATION_JSON, path),
+                          list(config.data.channels), path / NORMALISATION_JSON)
+    heads = _heads(info["heads"], info_path)
     trained = None
     if "input" in info:
         trained = InputSpec.from_dict(info["input"], path=info_path)

@@ -29,6 +29,7 @@ from torch import nn
 from .._version import __version__
 from ..errors import InputError
 from ..interrupt import raise_if_requested
+from ..store.outdir import check_output_folder
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 from .config import TrainConfig
@@ -222,8 +223,9 @@ def train(
     """
     started = time.perf_counter()
     out = Path(out)
-    if out.exists() and not overwrite:
+    if out.exists() and out.is_dir() and not overwrite:
         raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
+    check_output_folder(out, overwrite=overwrite)  # a file at `out` or a parent: before work
     paths = data_files(data_paths)
     opt_cfg = config.optim
     threads = opt_cfg.threads

@@ -30,7 +30,9 @@ from ..vocabulary import BIN_S
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True)
+    # NaN and infinities are errors: a rate of 1e999 is a typo, not a scene
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True,
+                              allow_inf_nan=False)
 
 
 Range = tuple[float, float]
@@ -106,6 +108,9 @@ class TimingConfig(_Model):
     def _ranges(self) -> TimingConfig:
         for name in type(self).model_fields:
             _check_range(name, getattr(self, name))
+            if getattr(self, name)[1] > 3600:  # an hour of 20 ms bins is already 180 000
+                raise ValueError(f"`{name}` high (={getattr(self, name)[1]}) must be at most "
+                                 "3600 s")
         if self.press_duration_s[1] > self.press_region_s[0]:
             raise ValueError(f"`press_duration_s` high (={self.press_duration_s[1]}) must be at "
                              f"most `press_region_s` low (={self.press_region_s[0]}): T of eq. "
@@ -132,7 +137,7 @@ class FosConfig(_Model):
     """tau_1 of eq. 16, seconds (sec. 4.2: about 300 ms)."""
     tau_press_jitter_rel: float = Field(default=0.03, ge=0, le=0.3)
     """Per-trial jitter of tau_1."""
-    alpha_slip: float = Field(default=1615.0, gt=0)
+    alpha_slip: float = Field(default=1615.0, gt=0, le=1e7)
     """alpha_2 of eq. 17 (sec. 4.2: about 1615)."""
     alpha_slip_jitter_rel: float = Field(default=0.03, ge=0, le=0.3)
     """Per-trial jitter of alpha_2."""
@@ -181,9 +186,10 @@ class PolarityConfig(_Model):
 class NoiseConfig(_Model):
     """Noise beside the Poisson counting noise of every bin."""
 
-    background_rate_hz: float = Field(default=2000.0, ge=0)
+    background_rate_hz: float = Field(default=2000.0, ge=0, le=1e7)
     """Background events per second over the whole sensor, half of each polarity,
-    uniform in space and time."""
+    uniform in space and time; at most 10^7 (ten million events a second of noise alone
+    would fill the memory before the scene does)."""
 
 
 class SensorConfig(_Model):

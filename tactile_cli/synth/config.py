@@ -23,7 +23,9 @@ Range = tuple[float, float]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True)
+    # NaN and infinities are errors: a gain of 1e999 is a typo, not a distribution
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, frozen=True,
+                              allow_inf_nan=False)
 
 
 def _range(name: str, value: Range, *, minimum: float | None = 0.0) -> Range:
@@ -109,7 +111,7 @@ class FosConfig(_Model):
     press_duration_s: Range = (0.3, 0.5)
     """T of eq. 16, uniform (not in the paper; the scene's range). Also used with --fits when
     the fits had T known rather than fitted."""
-    alpha_slip: float = Field(default=1615.0, gt=0)
+    alpha_slip: float = Field(default=1615.0, gt=0, le=1e7)
     """alpha_2 of eq. 17 (paper: about 1615)."""
     alpha_slip_jitter_rel: float = Field(default=0.03, ge=0)
     tau_slip_s: float = Field(default=0.325, gt=0)
@@ -217,9 +219,9 @@ class SynthConfig(_Model):
 
     bin_s: float = Field(default=BIN_S, gt=0, le=1)
     """Bin width of the event counts, s (the paper's 20 ms)."""
-    width_px: int = Field(default=640, ge=1)
+    width_px: int = Field(default=640, ge=1, le=65535)
     """Sensor geometry recorded on the event_counts sensor (the paper's 640 x 480)."""
-    height_px: int = Field(default=480, ge=1)
+    height_px: int = Field(default=480, ge=1, le=65535)
     levels: LevelsConfig = LevelsConfig()
     timing: TimingConfig = TimingConfig()
     fos: FosConfig = FosConfig()
