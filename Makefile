@@ -6,6 +6,8 @@
 #                             one HDF5 file per raw recording; parallel under make -j;
 #                             outputs that are up to date are skipped
 #   make bench                run the benchmarks in benchmarks/ (figures: benchmarks/RESULTS.md)
+#   make fuzz                 every command on the seeded corpus of damaged inputs (issue 20):
+#                             counts per outcome class (`make test` runs a fast subset)
 
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
@@ -13,7 +15,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: bench-long demo demo-events demo-learn test ingest bench lint clean
+.PHONY: bench-long demo demo-events demo-learn test ingest bench lint clean fuzz
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -99,6 +101,14 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py
 	$(BIN)/python benchmarks/fit_fos.py
 	$(BIN)/python benchmarks/fuzzy.py
+
+# Damaged and hostile inputs (issue 20): truncated, byte-flipped, retyped and absurd inputs of
+# every kind, each run through the commands that take it; prints the counts per outcome
+# class and per command as markdown (benchmarks/RESULTS.md). FUZZ_FLAGS="--n-random 4" grows
+# the corpus; "--findings FILE" lists every failing run.
+FUZZ_FLAGS ?= --seed 0 --n-random 1
+fuzz: $(STAMP)
+	$(BIN)/python benchmarks/fuzz_corpus.py $(FUZZ_FLAGS) --markdown
 
 # Stability sweeps and accuracy studies: minutes each (about 35 in all on 2 cores); they
 # rewrite benchmarks/figures/. xela_loto needs the real recordings in ../shared/data.
