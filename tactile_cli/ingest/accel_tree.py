@@ -25,7 +25,9 @@ than read with the velocities swapped. Names that name none of them are taken by
 - the slip velocity (grasped object) and slide velocity (slider), in m/s.
 
 A header row is optional: a first line whose 8 fields are all numbers is data. Rows
-sampled at 8 kHz (sec. 3.1) unless another rate is given.
+sampled at 8 kHz (sec. 3.1) unless another rate is given. The files are written by the
+acquisition program, so a last line without a line break is taken for a row cut short and
+refused.
 
 Two streams per trial: ``accel`` (sensor kind ``accelerometer``, 6 channels) with the
 per-sample label ``motion``, and ``velocity`` (kind ``robot_state``, 2 channels, m/s),
@@ -184,7 +186,7 @@ def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOp
         dialect = _dialect(path)
         names = read_csv_header(path, dialect)  # COLUMNS when there is no header
         _check_header(names, path)
-        table = read_csv_table(path, dialect, numeric=names)
+        table = read_csv_table(path, dialect, numeric=names, final_newline=True)
         values = np.column_stack([table.columns[n] for n in names])  # (n, 8) by position
         t_s = np.arange(table.n_rows, dtype=np.float64) / sample_rate_hz
         motion = motion_class(values[:, 6], values[:, 7])

@@ -22,10 +22,13 @@ checked and appended, so memory stays bounded. Progress counts bytes of the file
 
 from __future__ import annotations
 
+import os
 import re
 import struct
+import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -82,6 +85,7 @@ def read_streams(path: Path) -> dict[int, StreamInfo]:
 
 def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
                  progress: Progress) -> None:
+    check_layout(path)
     streams = read_streams(path)
     event_streams = [s for s in streams.values() if s.type == "events"]
     if not event_streams:
@@ -154,11 +158,43 @@ class _Gather:
         self.pending, self.n_pending = [], 0
 
 
+def _decoder_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is the decoder refusing the file: its Rust panics reach Python as
+    ``pyo3_runtime.PanicException``, a BaseException subclass that cannot be imported."""
+    if isinstance(exc, (KeyboardInterrupt, SystemExit, GeneratorExit)):
+        return False
+    return (isinstance(exc, (RuntimeError, OSError, ValueError))
+            or type(exc).__name__ == "PanicException")
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text[:200] or type(exc).__name__
+
+
+@contextmanager
+def _stderr_to_nothing() -> Iterator[None]:
+    """Silence file descriptor 2 for a moment: a Rust panic in the decoder prints its message
+    (and a backtrace) there before it reaches Python as an exception, which we report."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _open(path: Path) -> Any:
     try:
-        return aedat.Decoder(path)
-    except (RuntimeError, OSError, ValueError) as exc:
-        raise InputError(f"not a readable AEDAT4 file ({exc})", path=path) from None
+        with _stderr_to_nothing():
+            return aedat.Decoder(path)
+    except BaseException as exc:
+        if not _decoder_error(exc):
+            raise
+        raise InputError(f"not a readable AEDAT4 file ({_one_line(exc)})", path=path) from None
 
 
 def _packets(path: Path, *, events_read: Callable[[], int]) -> Iterator[dict[str, Any]]:
@@ -169,9 +205,11 @@ def _packets(path: Path, *, events_read: Callable[[], int]) -> Iterator[dict[str
             packet = next(decoder)
         except StopIteration:
             return
-        except (RuntimeError, OSError, ValueError) as exc:
+        except BaseException as exc:
+            if not _decoder_error(exc):
+                raise
             raise InputError(f"AEDAT4 file is truncated or corrupt after {events_read()} events "
-                             f"(decoder: {exc})", path=path) from None
+                             f"(decoder: {_one_line(exc)})", path=path) from None
         yield packet
 
 
@@ -196,6 +234,157 @@ def _packet_sizes(f: BinaryIO) -> Iterator[int]:
             return
         pos += 8 + n_bytes
         yield 8 + n_bytes
+
+
+#: IOHeader ``compression`` values (dv-processing ``CompressionType``).
+_COMPRESSION = {0: "none", 1: "lz4", 2: "lz4", 3: "zstd", 4: "zstd"}
+
+
+def check_layout(path: Path) -> None:
+    """Refuse a file whose bytes the packets and the file data table do not account for
+    exactly: a file cut short (inside a packet or inside the closing data table) or one with
+    bytes after its end. The decoder reads packets until the data, or the file, ends, so it
+    reports neither. Reads the 8-byte packet headers and the table's frame headers only."""
+    try:
+        with open(path, "rb") as f:
+            problem = _layout_problem(f)
+    except OSError as exc:
+        raise InputError(f"cannot read the AEDAT4 file ({_one_line(exc)})", path=path) from None
+    if problem is not None:
+        raise InputError(f"{problem}; re-export or re-copy the recording", path=path)
+
+
+def _layout_problem(f: BinaryIO) -> str | None:
+    size = f.seek(0, 2)
+    f.seek(0)
+    if f.read(len(MAGIC)) != MAGIC:
+        return "not a readable AEDAT4 file (wrong magic number: no #!AER-DAT4.0 at its start)"
+    head = f.read(4)
+    if len(head) < 4:
+        return "AEDAT4 file is cut short inside its header"
+    (header_len,) = struct.unpack("<I", head)
+    start = len(MAGIC) + 4 + header_len
+    if start > size:
+        return f"AEDAT4 file is cut short inside its header ({size} bytes, header ends at {start})"
+    try:
+        compression, table_pos, info = _io_header(f.read(header_len))
+    except (struct.error, ValueError):
+        return "AEDAT4 file header is damaged (its IOHeader cannot be parsed)"
+    try:  # checked here: the decoder panics (or aborts the process) on some damaged headers
+        ET.fromstring(info.decode("utf-8"))
+    except (UnicodeDecodeError, ET.ParseError) as exc:
+        return f"AEDAT4 file header is damaged (its XML description: {_one_line(exc)})"
+    if table_pos >= 0 and not start <= table_pos <= size:
+        return (f"AEDAT4 header puts the file data table at byte {table_pos}, outside the "
+                f"file's packets (bytes {start}..{size}): the file is cut short or damaged")
+    end = table_pos if table_pos >= 0 else size
+    pos = start
+    while pos < end:
+        f.seek(pos)
+        head = f.read(8)
+        if len(head) < 8 or pos + 8 > end:
+            return f"AEDAT4 file is cut short or damaged inside the packet at byte {pos}"
+        stream_id, n_bytes = struct.unpack("<iI", head)
+        if stream_id < 0 or pos + 8 + n_bytes > end:
+            return (f"AEDAT4 file is cut short or damaged: the packet at byte {pos} runs past "
+                    f"{'the file data table' if table_pos >= 0 else 'the end of the file'} "
+                    f"(byte {end})")
+        pos += 8 + n_bytes
+    if table_pos < 0:
+        return None
+    kind = _COMPRESSION.get(compression)
+    if kind is None:
+        return f"AEDAT4 header names an unknown compression ({compression})"
+    f.seek(table_pos)
+    length = _frame_length(kind, f.read(size - table_pos))
+    if length is None:
+        return (f"the file data table at byte {table_pos} is damaged or cut short (the file "
+                f"ends at byte {size})")
+    if table_pos + length < size:
+        return (f"{size - table_pos - length} bytes after the end of the file data table "
+                f"(byte {table_pos + length}): trailing garbage, or two files joined")
+    return None
+
+
+def _io_header(buf: bytes) -> tuple[int, int, bytes]:
+    """(compression, data table position or -1, XML description) from the header's IOHeader
+    flatbuffer; struct.error or ValueError when an offset points outside it."""
+    def get(fmt: str, at: int) -> int:
+        if at < 0:
+            raise ValueError(f"offset {at}")
+        return struct.unpack_from(fmt, buf, at)[0]
+
+    table = get("<I", 0)
+    vtable = table - get("<i", table)
+    vt_len = get("<H", vtable)
+
+    def field(i: int) -> int:  # offset of field i in the table, 0 when absent
+        at = 4 + 2 * i
+        return get("<H", vtable + at) if at + 2 <= vt_len else 0
+
+    compression = get("<i", table + field(0)) if field(0) else 0
+    table_pos = get("<q", table + field(1)) if field(1) else -1
+    if not field(2):
+        raise ValueError("no XML description")
+    text = table + field(2) + get("<I", table + field(2))
+    length = get("<I", text)
+    if text + 4 + length > len(buf):
+        raise ValueError("XML description runs past the header")
+    return compression, table_pos, buf[text + 4:text + 4 + length]
+
+
+def _frame_length(kind: str, buf: bytes) -> int | None:
+    """Bytes of the one compressed frame (or size-prefixed flatbuffer) at the start of
+    ``buf``, from its headers and block sizes alone; None when it is damaged or runs past
+    the end of ``buf``."""
+    try:
+        if kind == "none":
+            n = 4 + struct.unpack_from("<I", buf, 0)[0]
+        elif kind == "lz4":
+            n = _lz4_frame_length(buf)
+        else:
+            n = _zstd_frame_length(buf)
+    except struct.error:
+        return None
+    return n if n is not None and n <= len(buf) else None
+
+
+def _lz4_frame_length(buf: bytes) -> int | None:
+    if buf[:4] != b"\x04\x22\x4d\x18" or len(buf) < 7:
+        return None
+    flg = buf[4]
+    if flg >> 6 != 1:
+        return None
+    pos = 6 + (8 if flg & 0x08 else 0) + (4 if flg & 0x01 else 0) + 1  # FLG BD [size] [dict] HC
+    while True:
+        (block,) = struct.unpack_from("<I", buf, pos)
+        pos += 4
+        if block == 0:  # end mark
+            return pos + (4 if flg & 0x04 else 0)
+        pos += (block & 0x7FFFFFFF) + (4 if flg & 0x10 else 0)
+        if pos > len(buf):
+            return None
+
+
+def _zstd_frame_length(buf: bytes) -> int | None:
+    if buf[:4] != b"\x28\xb5\x2f\xfd" or len(buf) < 5:
+        return None
+    fhd = buf[4]
+    single = (fhd >> 5) & 1
+    fcs = (1 if single else 0, 2, 4, 8)[fhd >> 6]
+    pos = 5 + (0 if single else 1) + (0, 1, 2, 4)[fhd & 3] + fcs
+    while True:
+        if pos + 3 > len(buf):
+            return None
+        header = int.from_bytes(buf[pos:pos + 3], "little")
+        kind = (header >> 1) & 3
+        if kind == 3:
+            return None
+        pos += 3 + (1 if kind == 1 else header >> 3)
+        if header & 1:  # last block
+            return pos + (4 if fhd & 0x04 else 0)
+        if pos > len(buf):
+            return None
 
 
 def _header_attributes(path: Path) -> dict[int, dict[str, str]]:
@@ -227,4 +416,4 @@ def _header_attributes(path: Path) -> dict[int, dict[str, str]]:
     return out
 
 
-__all__ = ["ingest_aedat4", "read_streams", "StreamInfo"]
+__all__ = ["ingest_aedat4", "read_streams", "check_layout", "StreamInfo"]

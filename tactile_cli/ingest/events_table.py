@@ -44,6 +44,7 @@ import io
 import os
 import re
 import threading
+import tokenize
 from collections import deque
 from collections.abc import Generator, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -395,8 +396,10 @@ def _npy_layout(path: Path) -> tuple[np.dtype, int, int]:
     _regular_file(path)
     try:
         array = np.load(path, mmap_mode="r", allow_pickle=False)
-    except (ValueError, OSError, EOFError) as exc:
-        raise InputError(f"not a readable .npy array ({str(exc).splitlines()[0]})",
+    except (ValueError, OSError, EOFError, SyntaxError, TypeError, OverflowError, MemoryError,
+            tokenize.TokenError) as exc:  # a damaged header dict fails in numpy's parser
+        detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise InputError(f"not a readable .npy array (damaged header or data: {detail})",
                          path=path) from None
     if not isinstance(array, np.memmap):  # an .npz archive
         close = getattr(array, "close", None)

@@ -113,13 +113,16 @@ def read_csv_table(
     *,
     numeric: Sequence[str] = (),
     text: Sequence[str] = (),
+    final_newline: bool = False,
 ) -> CsvTable:
     """Parse the named columns of a delimited file, checking every row first.
 
     numeric: columns parsed as float64, which must all be finite (``nan``/``-nan`` and
     ``inf`` are errors naming line and column); text: columns kept as strings.
     Every data row must hold exactly as many fields as the header (plus one empty field
-    with ``trailing_delimiter``); blank lines are allowed only at the end of the file.
+    with ``trailing_delimiter``); blank lines are allowed only at the end of the file, NUL
+    bytes nowhere. final_newline: the last line must end with a line break (for files that a
+    program wrote, where a last line without one is a row cut short).
     Raises :class:`InputError` naming the file, line and column.
     """
     raw = read_bytes(path, "CSV file")
@@ -130,6 +133,15 @@ def read_csv_table(
     nonblank = np.flatnonzero(ends > starts)
     if len(nonblank) == 0:
         raise InputError("the file is empty", path=path)
+    nul = np.flatnonzero(buf == 0)
+    if len(nul):
+        raise InputError("NUL bytes in the line (binary data, or a damaged file); a CSV file is "
+                         "plain text", path=path,
+                         where=f"line {int(np.searchsorted(starts, nul[0], side='right'))}")
+    if final_newline and buf[-1] not in (10, 13):  # else a cut row would pass as complete
+        raise InputError("the last line does not end with a line break: the file looks cut "
+                         "short; if the line is complete, end the file with a newline",
+                         path=path, where=f"line {len(starts)}")
     n_lines = int(nonblank[-1]) + 1  # trailing blank lines are dropped
     starts, ends = starts[:n_lines], ends[:n_lines]
     if dialect.header:

@@ -12,7 +12,13 @@ before any recording is, and applied after the format reader ran:
 - trial labels: a ``trial`` column plus any others; each other column becomes a label
   attribute of that trial (``/trials/<trial>/labels``), numbers stored as numbers (int when
   written as an integer, else float), text as text; empty cells are skipped. A trial has at
-  most one row. A label that a reader or ``--label`` already set must agree.
+  most one row. A label that a reader or ``--label`` already set must agree. ``nan`` and
+  ``inf`` are refused, and so is one text cell in a column whose other cells are numbers.
+
+Both files hold no NUL bytes and at least one row after the header. A last line without a
+line break is accepted (hand-written files often lack one), so a last row cut short inside
+its last cell cannot be told from a complete one; a row cut before its last field is
+refused for its missing fields.
 
 Every broken rule is an :class:`~tactile_cli.errors.InputError` naming the file and the
 line (line 1 is the header), including a row whose trial is not among the ingested trials.
@@ -59,6 +65,10 @@ def _rows(path: Path, what: str) -> Iterator[tuple[int, list[str]]]:
     lines = text.rstrip("\r\n \t").splitlines()
     if not lines or not lines[0].strip():
         raise InputError(f"{what} file is empty; expected a header line", path=path)
+    if "\0" in text:
+        raise InputError("NUL bytes in the line (binary data, or a damaged file); the "
+                         f"{what} file must be plain UTF-8 text", path=path,
+                         where=f"line {text[:text.index(chr(0))].count(chr(10)) + 1}")
     reader = csv.reader(lines, strict=True)
     try:
         for cells in reader:
@@ -125,13 +135,22 @@ def read_annotations(path: str | Path) -> Annotations:
         if not row["label"]:
             raise InputError("empty label", path=path, where=f"line {line}")
         rows.setdefault(trial, []).append((times[0], times[1], row["label"], line))
+    _no_rows(path, "annotations", bool(rows))
     return Annotations(path, rows)
+
+
+def _no_rows(path: Path, what: str, any_rows: bool) -> None:
+    if not any_rows:  # given on purpose and empty: almost surely the wrong or a cut file
+        raise InputError(f"no rows after the header; a {what} file holds one row per "
+                         f"{'interval' if what == 'annotations' else 'trial'} (leave the file "
+                         "out if there is nothing to add)", path=path)
 
 
 def read_trial_labels(path: str | Path) -> TrialLabels:
     """Parse a trial-labels CSV (see the module docstring); raises InputError."""
     path = Path(path)
     rows: dict[str, tuple[dict[str, str | int | float], int]] = {}
+    cells_of: dict[str, list[tuple[int, str | int | float]]] = {}  # column -> (line, value)
     names: list[str] = []
     for line, cells in _rows(path, "trial labels"):
         if line == 1:
@@ -155,9 +174,44 @@ def read_trial_labels(path: str | Path) -> TrialLabels:
         if trial in rows:
             raise InputError(f"trial {trial!r} has a second row (the first is line "
                              f"{rows[trial][1]})", path=path, where=f"line {line}")
-        labels = {safe_name(k): number_or_text(v) for k, v in row.items() if v.strip() != ""}
+        labels = {}
+        for key, cell in row.items():
+            if cell.strip() == "":
+                continue
+            value = number_or_text(cell)
+            if _non_finite(value):
+                raise InputError(f"{cell.strip()!r} is not a finite number; write the label "
+                                 "as a finite number or leave the cell empty", path=path,
+                                 where=f"line {line}, column {key!r}")
+            labels[safe_name(key)] = value
+            cells_of.setdefault(key, []).append((line, value))
         rows[trial] = (labels, line)
+    _no_rows(path, "trial labels", bool(rows))
+    _text_among_numbers(path, cells_of)
     return TrialLabels(path, rows)
+
+
+def _non_finite(value: str | int | float) -> bool:
+    """A float that is not finite, or text that Python reads as one (``nan``, ``-inf``)."""
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            return False
+    return isinstance(value, float) and not math.isfinite(value)
+
+
+def _text_among_numbers(path: Path, cells_of: dict[str, list[tuple[int, str | int | float]]]
+                        ) -> None:
+    """Refuse one text cell in a column whose other cells are all numbers (a typo, or a
+    damaged cell: ``12`` -> ``1x``); columns of free text, or of mixed text, are kept."""
+    for key, cells in cells_of.items():
+        text = [(line, v) for line, v in cells if isinstance(v, str)]
+        if len(text) == 1 and len(cells) > 1:
+            line, value = text[0]
+            raise InputError(f"{value!r} is not a number, but every other cell of column "
+                             f"{key!r} is; fix the cell (labels of one column are all numbers "
+                             "or all text)", path=path, where=f"line {line}, column {key!r}")
 
 
 def number_or_text(cell: str) -> str | int | float:

@@ -59,7 +59,7 @@ def test_annotations_and_labels_round_trip_exactly(tmp_path, recordings):
     labels = _write(tmp_path / "labels.csv",
                     "trial,force_level,alpha,grade,note,big,neg\n"
                     "rec_a,12,2280.125,small big,,123456789012,-3\n"
-                    "rec b,1,1.5e3,light,nan,7,-0.25\n")
+                    "rec b,1,1.5e3,light,none,7,-0.25\n")
     out = tmp_path / "out.h5"
     result = _ingest_cli(recordings, out, "--annotations", str(ann), "--trial-labels",
                          str(labels), "--label", "rig=bench")
@@ -77,7 +77,7 @@ def test_annotations_and_labels_round_trip_exactly(tmp_path, recordings):
                                        "grade": "small big", "big": 123456789012, "neg": -3,
                                        "rig": "bench"}  # the empty note is skipped
         assert _attrs(b["labels"]) == {"force_level": 1, "alpha": 1500.0, "grade": "light",
-                                       "note": "nan", "big": 7, "neg": -0.25, "rig": "bench"}
+                                       "note": "none", "big": 7, "neg": -0.25, "rig": "bench"}
         assert isinstance(_attrs(a["labels"])["force_level"], int)
         sources = f["provenance/sources/path"].asstr()[()].tolist()
         assert sources[-2:] == [str(ann), str(labels)]
