@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
 from collections.abc import Sequence
@@ -303,16 +302,10 @@ def run_labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
 def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> RunPoint:
     """The :class:`RunPoint` of ``RUN/eval/<data_name>/metrics.json``."""
     path = run_dir / runs.EVAL_DIR / data_name / runs.METRICS_JSON
-    try:
-        m = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
+    if not path.exists() and not path.is_symlink():
         raise InputError(f"no evaluation named {data_name!r}; run `tactile evaluate`",
-                         path=run_dir) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"metrics.json is not valid JSON ({exc})", path=path) from None
-    if m.get("format") != runs.EVAL_FORMAT:
-        raise InputError(f"metrics.json format is {m.get('format')!r}, not "
-                         f"{runs.EVAL_FORMAT!r}", path=path)
+                         path=run_dir)
+    m = runs.read_metrics(path)
     score = _score(m, metric, path)
     head = m["heads"][m["primary_head"]]
     lat = m.get("latency") or {}
@@ -426,16 +419,12 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
         if d.resolve() in seen:
             raise InputError("run given twice", path=d)
         seen.add(d.resolve())
-    name = choose_data_name(dirs, data_name)
     families, infos = [], []
     for d in dirs:
-        try:
-            info = json.loads((d / runs.RUN_JSON).read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
-            raise InputError(f"run.json is not valid JSON ({exc})",
-                             path=d / runs.RUN_JSON) from None
-        families.append(str(info.get("model", {}).get("family", "?")))
+        info = runs.read_run_info(d)
+        families.append(info["model"]["family"])
         infos.append(info)
+    name = choose_data_name(dirs, data_name)
     labels = run_labels(dirs, families)
     points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
     _check_same_data(points)

@@ -246,7 +246,7 @@ def evaluate(
     cfg = run.config
     trials = read_trials(paths, cfg.data, trained=True)
     spec, notes = checked_input(trials, cfg.data.stream, run.input, run.path)
-    check_heads_match(run.heads, trials)
+    check_heads_match(run.heads, trials, stream=cfg.data.stream)
     if split == "test":
         assignment = assign_splits(trials, cfg.data.split, cfg.seed)
         trials = [trials[i] for i in assignment.indices("test")]

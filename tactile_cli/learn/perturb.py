@@ -552,7 +552,7 @@ def perturb_evaluate(
 
     trials = read_trials(paths, cfg.data, trained=True)
     spec, input_notes = checked_input(trials, cfg.data.stream, run_obj.input, run_obj.path)
-    check_heads_match(run_obj.heads, trials)
+    check_heads_match(run_obj.heads, trials, stream=cfg.data.stream)
     if split == "test":
         assignment = assign_splits(trials, cfg.data.split, cfg.seed)
         trials = [trials[i] for i in assignment.indices("test")]

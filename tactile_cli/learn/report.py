@@ -25,14 +25,11 @@ from __future__ import annotations
 
 import base64
 import html
-import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from .._version import __version__
 from ..errors import InputError, TactileError
@@ -261,7 +258,7 @@ def _config_summary(d: Path, info: dict[str, Any], cfg: dict[str, Any]) -> str:
 def _eval_section(d: Path, name: str, inputs: _Inputs) -> str:
     folder = d / runs.EVAL_DIR / name
     path = folder / runs.METRICS_JSON
-    m = json.loads(path.read_text(encoding="utf-8"))
+    m = runs.read_metrics(path)
     inputs.add("metrics", path)
     data = ", ".join(f"{x.get('path')} ({x.get('n_trials')} trials)" for x in m.get("data", []))
     out = [f"<h4>evaluation {_e(name)}</h4>",
@@ -312,13 +309,10 @@ def _eval_section(d: Path, name: str, inputs: _Inputs) -> str:
 
 def _run_section(d: Path, label: str, inputs: _Inputs) -> str:
     info_path = d / runs.RUN_JSON
-    try:
-        info = json.loads(info_path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"run.json is not valid JSON ({exc})", path=info_path) from None
+    info = runs.read_run_info(d)
     inputs.add("run", info_path)
     cfg_path = d / runs.CONFIG_YAML
-    cfg = yaml.safe_load(cfg_path.read_text(encoding="utf-8")) if cfg_path.is_file() else {}
+    cfg = runs.read_run_config(d).model_dump(mode="json")
     inputs.add("config", cfg_path)
     out = [f"<h3 id='run-{_e(label)}'>{_e(label)}</h3><p class='muted'>{_e(d)}</p>",
            _config_summary(d, info, cfg or {})]
@@ -423,12 +417,8 @@ def build_report(
     notes: list[str] = []
     families = []
     for d in dirs:
-        try:
-            families.append(json.loads((d / runs.RUN_JSON).read_text(encoding="utf-8"))
-                            .get("model", {}).get("family", "?"))
-        except json.JSONDecodeError as exc:
-            raise InputError(f"run.json is not valid JSON ({exc})",
-                             path=d / runs.RUN_JSON) from None
+        families.append(runs.read_run_info(d)["model"]["family"])
+        runs.read_run_config(d)  # a damaged config is refused before anything is written
     labels = run_labels(dirs, families)
     cmp_html, compared = _comparison_sections(dirs, margin_pp, metric, notes)
     pert_html, perturbed = _perturbation_sections(dirs, inputs)

@@ -245,9 +245,17 @@ def _heads(raw: Any, path: Path) -> list[HeadSpec]:
     return heads
 
 
-def load_run(path: str | Path) -> Run:
-    """Read a run folder, checking every file before use (format and version, keys and their
-    types, finite normalisation); errors name the file and the command that re-creates it."""
+#: Keys of the run.json `tactile train` writes and the JSON types they hold ("input" is left
+#: out: runs trained before issue 10 lack it).
+_RUN_KEYS: dict[str, tuple[type, ...]] = {
+    "created_utc": (str,), "command": (str,), "config_file": (str, type(None)),
+    "versions": (dict,), "seed": (int,), "data": (list,), "heads": (list,),
+    "class_weights": (dict, type(None)), "split": (dict,), "model": (dict,),
+    "training": (dict,), "wall_time_s": (int, float)}
+
+
+def _run_folder(path: str | Path) -> Path:
+    """``path`` if it is a folder holding run.json, else one InputError saying what it is."""
     path = Path(path)
     if not path.exists():
         if path.is_symlink():
@@ -261,12 +269,22 @@ def load_run(path: str | Path) -> Run:
     if not info_path.exists() and not info_path.is_symlink():
         raise InputError("not a run folder (no run.json); train one with `tactile train`",
                          path=path)
+    return path
+
+
+def read_run_info(path: str | Path) -> dict[str, Any]:
+    """A run folder's run.json, checked: a JSON object of format ``tactile-run`` version 1
+    with every key `tactile train` writes, of the right JSON type. Every reader of run.json
+    (evaluate, perturb, compare, report) goes through here; errors name the file and the
+    command that re-creates it."""
+    path = _run_folder(path)
+    info_path = path / RUN_JSON
     info = _read_json(info_path, path)
     if not isinstance(info, dict):
         raise InputError(f"run.json is not a JSON object; {_RETRAIN}", path=info_path)
     if info.get("format") != RUN_FORMAT:
-        raise InputError(f"run.json format is {info.get('format')!r}, not {RUN_FORMAT!r}",
-                         path=info_path)
+        raise InputError(f"run.json format is {info.get('format')!r}, not {RUN_FORMAT!r}; "
+                         f"{_RETRAIN}", path=info_path)
     if info.get("format_version") != RUN_FORMAT_VERSION:
         raise InputError(f"run folder format version {info.get('format_version')} cannot be "
                          f"read by tactile {__version__} (reads {RUN_FORMAT_VERSION}); "
@@ -278,15 +296,77 @@ def load_run(path: str | Path) -> Run:
             isinstance(d, dict) and isinstance(d.get("sha256"), str) for d in data):
         raise InputError(f"`data` must list the training files with their sha256; {_RETRAIN}",
                          path=info_path)
+    for key, types in _RUN_KEYS.items():
+        if key not in info:
+            raise InputError(f"run.json has no `{key}`; {_RETRAIN}", path=info_path)
+        value = info[key]
+        if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
+            need = " or ".join("null" if t is type(None) else _JSON_NAMES[t] for t in types)
+            raise InputError(f"`{key}` must be {need}, not {type(value).__name__}; "
+                             f"{_RETRAIN}", path=info_path)
+    if not isinstance(info["model"].get("family"), str):
+        raise InputError(f"`model.family` must be a string; {_RETRAIN}", path=info_path)
+    return info
+
+
+_JSON_NAMES = {str: "a string", int: "a number", float: "a number", dict: "a JSON object",
+               list: "a list"}
+
+
+def read_run_config(path: str | Path) -> TrainConfig:
+    """A run folder's config.resolved.yaml, read and validated; a missing, cut or broken file
+    is one InputError naming it (and the line) and saying to re-create the run."""
+    path = Path(path)
     cfg_path = path / CONFIG_YAML
     if not cfg_path.exists() and not cfg_path.is_symlink():
         raise InputError(f"run folder has no config.resolved.yaml; {_RETRAIN}", path=path)
     text = read_text(cfg_path, "config file", advice=f"the file is damaged: {_RETRAIN}")
     try:
-        config = parse_config(parse_yaml(text, cfg_path), path=cfg_path, text=text)
+        return parse_config(parse_yaml(text, cfg_path), path=cfg_path, text=text)
     except InputError as exc:
         raise InputError(f"{exc.message}; the run folder is damaged: {_RETRAIN}",
                          path=exc.path, where=exc.where) from None
+
+
+def read_metrics(path: str | Path) -> dict[str, Any]:
+    """An evaluation's metrics.json (``RUN/eval/<name>/metrics.json``), checked: a JSON object
+    of format ``tactile-eval`` version 1 whose ``heads`` map each head to its metrics."""
+    path = Path(path)
+    redo = "re-create it with `tactile evaluate` (`overwrite=True`)"
+    try:
+        m = json.loads(read_text(path, advice=f"the file is damaged: {redo}"))
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg}): the file is damaged or cut; {redo}",
+                         path=path, where=f"line {exc.lineno}, column {exc.colno}") from None
+    except (ValueError, RecursionError) as exc:
+        raise InputError(f"not valid JSON ({_first_line(exc)}); {redo}", path=path) from None
+    if not isinstance(m, dict):
+        raise InputError(f"metrics.json is not a JSON object; {redo}", path=path)
+    if m.get("format") != EVAL_FORMAT:
+        raise InputError(f"metrics.json format is {m.get('format')!r}, not {EVAL_FORMAT!r}; "
+                         f"{redo}", path=path)
+    if m.get("format_version") != EVAL_FORMAT_VERSION:
+        raise InputError(f"metrics.json format version {m.get('format_version')} cannot be "
+                         f"read by tactile {__version__} (reads {EVAL_FORMAT_VERSION}); {redo}",
+                         path=path)
+    heads = m.get("heads")
+    if not isinstance(heads, dict) or not all(
+            isinstance(h, dict) and isinstance(h.get("kind"), str) for h in heads.values()):
+        raise InputError(f"`heads` must map each head to its metrics; {redo}", path=path)
+    primary = m.get("primary_head")
+    if primary is not None and primary not in heads:
+        raise InputError(f"`primary_head` (={primary!r}) is not one of `heads`; {redo}",
+                         path=path)
+    return m
+
+
+def load_run(path: str | Path) -> Run:
+    """Read a run folder, checking every file before use (format and version, keys and their
+    types, finite normalisation); errors name the file and the command that re-creates it."""
+    path = _run_folder(path)
+    info_path = path / RUN_JSON
+    info = read_run_info(path)
+    config = read_run_config(path)
     norm = _normalisation(_read_json(path / NORMALISATION_JSON, path),
                           list(config.data.channels), path / NORMALISATION_JSON)
     heads = _heads(info["heads"], info_path)
@@ -307,4 +387,5 @@ def eval_dir_name(data_paths: list[Path], split: str) -> str:
 __all__ = ["CONFIG_YAML", "CURVES_PNG", "EVAL_DIR", "EVAL_FORMAT", "EVAL_FORMAT_VERSION",
            "HISTORY_CSV", "METRICS_JSON", "MODEL_PT", "NORMALISATION_JSON", "PREDICTIONS_CSV",
            "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "dumps",
-           "eval_dir_name", "json_safe", "load_run", "write_folder", "write_json"]
+           "eval_dir_name", "json_safe", "load_run", "read_metrics", "read_run_config",
+           "read_run_info", "write_folder", "write_json"]

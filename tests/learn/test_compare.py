@@ -41,13 +41,20 @@ def point(label: str, score: float, latency_ms: float | None, n_params: int) -> 
                     primary_head="action")
 
 
+def run_info(family):
+    """A run.json with every key `tactile train` writes (read_run_info checks them)."""
+    return {"format": "tactile-run", "format_version": 1, "created_utc": "2026-01-01T00:00:00",
+            "command": "test", "config_file": None, "versions": {}, "seed": 0, "data": [],
+            "heads": [], "class_weights": None, "split": {}, "model": {"family": family},
+            "training": {}, "wall_time_s": 0.0}
+
+
 def fake_run(root, name, family, *, accuracy, latency_ms, n_params, data_name="scene",
              sha="a" * 64, split="all", f1_slip=0.5, recordings=None, n_trials=3):
     """A run folder with run.json and one hand-made eval/<data_name>/metrics.json."""
     run = root / name
     (run / "eval" / data_name).mkdir(parents=True)
-    (run / "run.json").write_text(json.dumps({"format": "tactile-run", "format_version": 1,
-                                              "model": {"family": family}}))
+    (run / "run.json").write_text(json.dumps(run_info(family)))
     metrics = {
         "format": "tactile-eval", "format_version": 1, "family": family, "name": data_name,
         "split": split, "data": [{"path": "scene.h5", "sha256": sha, "n_trials": n_trials,
