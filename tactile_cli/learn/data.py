@@ -258,13 +258,24 @@ def _trial_value(trial: TrialSeries, name: str) -> Any:
     return trial.trial_labels[name]
 
 
-def check_heads_match(heads: Sequence[HeadSpec], trials: Sequence[TrialSeries]) -> None:
-    """Raise when evaluation data use other class names than the run's heads."""
+def check_heads_match(heads: Sequence[HeadSpec], trials: Sequence[TrialSeries], *,
+                      stream: str | None = None) -> None:
+    """Raise when evaluation data use other class names than the run's heads, or give no
+    class names where the run was trained on named classes (``stream``: the stream the
+    labels belong to, for the HDF5 path in the message)."""
     for head in heads:
         if head.kind != "classification" or head.source != "sample":
             continue
+        numbered = head.classes == tuple(str(i) for i in range(len(head.classes)))
         for t in trials:
             classes = t.classes.get(head.name)
+            if classes is None and not numbered:
+                where = (f"/trials/{t.trial}/signals/{stream}/sample_labels/{head.name}"
+                         if stream else f"/trials/{t.trial}")
+                raise InputError(f"label {head.name!r} has no `classes` attribute, but the run "
+                                 f"was trained on classes {list(head.classes)}; give the "
+                                 "label its class names (as the training data did)",
+                                 path=t.file, where=where)
             if classes is not None and classes != head.classes:
                 raise InputError(f"label {head.name!r} has classes {list(classes)}; the run "
                                  f"was trained on {list(head.classes)}", path=t.file,
