@@ -125,6 +125,9 @@ def read_area_csv(path: str | Path) -> list[TrialArea]:
         trial, area_text = row[0].strip(), row[1].strip()
         if not trial:
             raise InputError("empty trial name", path=path, where=f"line {line}")
+        if any(ord(c) < 32 for c in trial):
+            raise InputError(f"trial name {trial!r} holds control characters (binary data, or "
+                             "a damaged file)", path=path, where=f"line {line}")
         if trial in seen:
             raise InputError(f"trial {trial!r} appears twice", path=path, where=f"line {line}")
         seen.add(trial)
@@ -191,10 +194,11 @@ def _net_stream(trial: Trial) -> dict[str, Any] | None:
     """net counts, bin centres, per-sample action labels of a stream with a ``net`` channel
     (``event_counts`` first), or None."""
     for stream_name in sorted(trial.signal_names, key=lambda s: s != "event_counts"):
-        try:
-            sensor = trial.signal_sensor(stream_name)
-        except InputError:  # no sensor, or one the file does not describe: not a count stream
-            continue
+        # a stream whose sensor is missing or damaged (rate, kind, channel names or units)
+        # is damage, not "no count stream": the reader's checks refuse it
+        sensor = trial.signal_sensor(stream_name)
+        if not sensor.channel_names:
+            trial.signal(stream_name)  # refuses a sampled stream whose sensor names no channel
         if "net" not in sensor.channel_names:
             continue
         signal = trial.signal(stream_name, channels=["net"])

@@ -132,8 +132,9 @@ class DataConfig(_Model):
     end, so the decision for a sample is made after that many later samples (a latency of
     ``label_delay`` samples that lets the model see a transition's first samples)."""
     targets: list[TargetConfig] = Field(min_length=1, max_length=_MAX_LIST)
-    bin_s: float = Field(default=BIN_S, gt=0, le=3600)
-    """Bin width (s) of event counts computed on the fly from events."""
+    bin_s: float = Field(default=BIN_S, ge=1e-6, le=3600)
+    """Bin width (s) of event counts computed on the fly from events: a whole number of
+    microseconds."""
     transform: Literal["none", "signed_log1p"] = "none"
     """Applied to every sample before normalisation: ``signed_log1p`` is
     ``sign(x) log(1 + |x|)``, which keeps both tens and thousands of events per bin
@@ -154,6 +155,8 @@ class DataConfig(_Model):
         names = [t.name for t in self.targets]
         if len(set(names)) != len(names):
             raise ValueError(f"`targets` names repeat: {names}")
+        if abs(round(self.bin_s * 1e6) - self.bin_s * 1e6) > 1e-6 * self.bin_s * 1e6:
+            raise ValueError(f"`bin_s` (={self.bin_s}) must be a whole number of microseconds")
         if self.label_rule == "majority" and self.label_delay:
             raise ValueError("`label_delay` applies to `label_rule: last` only")
         if self.label_delay >= self.window:

@@ -76,6 +76,11 @@ def _reading(path: Path, where: str) -> Iterator[None]:
                          "file with `tactile validate`", path=path, where=where) from None
 
 
+#: An annotation may start this long (plus the trial's length again) after the trial's
+#: recorded end (hand-made annotations may outlast a short recording); one that starts
+#: later is damage (intervals shifted off the trial's clock).
+ANNOTATION_SLACK_S = 60.0
+
 #: Rates above this are damage, not a sensor (the schema's maximum of ``sample_rate_hz``).
 MAX_RATE_HZ = 1e9
 
@@ -280,9 +285,30 @@ class TrialEvents:
             raise _content_error(self.path, f"{self.where}/ms_to_idx",
                                  "must be 1-D integers starting at 0, never decreasing and at "
                                  "most the event count")
+        self._check_index_ends()
         duration_s = trial.duration_s
         last_s = (self.t_last_us + 1 - self.origin_us) * 1e-6 if self.n_events else 0.0
         self.end_s = max(duration_s, last_s)
+
+    def _check_index_ends(self) -> None:
+        """The first and last entries of the ms index point at the first event at or after
+        their millisecond (as `tactile validate` checks on a sample of entries): events
+        shifted away from the trial's clock (damage) are refused on open, reading four
+        events at most."""
+        idx, n = self._ms_to_idx, self.n_events
+        if not n or not idx.size:
+            return
+        for k in sorted({0, idx.size - 1}):
+            i, edge = int(idx[k]), self._index_origin_us + 1000 * k
+            with _reading(self.path, f"{self.where}/t"):
+                at = int(self._t[i]) if i < n else None
+                before = int(self._t[i - 1]) if i > 0 else None
+            if (at is not None and at < edge) or (before is not None and before >= edge):
+                bad, value = (i, at) if at is not None and at < edge else (i - 1, before)
+                raise _content_error(self.path, f"{self.where}/t", f"event {bad} at {value} us "
+                                     f"does not fit the millisecond index (entry {k} of "
+                                     f"ms_to_idx starts at {edge} us, ms_index_origin_us + "
+                                     f"{k} ms): the event times are off the trial's clock")
 
     @cached_property
     def sensor(self) -> Sensor:
@@ -401,6 +427,14 @@ class Frames:
             self.shape = tuple(int(s) for s in self._images.shape[1:])
             self.t_s = np.asarray(self._group["t_s"][()], dtype=np.float64)
             self.sensor_name = str(attr_value(self._group.attrs.get("sensor", "")))
+        for name, ndim in (("images", 4), ("reference", 3)):
+            with _reading(self.path, f"{self.where}/{name}"):
+                ds = self._group[name] if name in self._group else None
+                if ds is not None and (ds.dtype != np.uint8 or ds.ndim != ndim
+                                       or ds.shape[-1] != 3):
+                    raise _content_error(self.path, f"{self.where}/{name}", f"holds {ds.dtype} "
+                                         f"of shape {ds.shape}; expected uint8 RGB images ("
+                                         f"{'n_frames, ' if ndim == 4 else ''}height, width, 3)")
         if self._images.ndim != 4 or self.t_s.shape != (self.n_frames,):
             raise _content_error(self.path, self.where, f"images {self._images.shape} and t_s "
                                  f"{self.t_s.shape} do not match (n_frames, height, width, 3)")
@@ -496,8 +530,31 @@ class Trial:
             raise _content_error(self.path, where, f"row {i} ({labels[i]!r}) runs from "
                                  f"{float(starts[i])!r} s to {float(ends[i])!r} s; an interval "
                                  "needs finite times and must not end before it starts")
+        end_s = self._recorded_end_s() if starts.size else 0.0
+        late = starts > 2 * end_s + ANNOTATION_SLACK_S
+        if end_s > 0 and late.any():
+            i = int(np.flatnonzero(late)[0])
+            raise _content_error(self.path, where, f"row {i} ({labels[i]!r}) starts at "
+                                 f"{float(starts[i])!r} s, after the trial's end ({end_s:g} s: "
+                                 "its duration_s, last event or last sample)")
         return [Annotation(float(s), float(e), str(lab))
                 for s, e, lab in zip(starts, ends, labels, strict=True)]
+
+    def _recorded_end_s(self) -> float:
+        """The trial's end, seconds: the latest of its ``duration_s``, its last event and
+        the last sample of each stream (0 when none is known); reads a few values only."""
+        end_s = self.duration_s
+        if self.has_events:
+            end_s = max(end_s, self.events.end_s)
+        for name in self.signal_names:
+            where = f"{self.where}/signals/{name}/t_s"
+            with _reading(self.path, where):
+                ds = self._group["signals"][name]["t_s"]
+                last = ds[-1] if ds.ndim == 1 and ds.shape[0] and ds.dtype.kind in "iuf" \
+                    else None
+            if last is not None and np.isfinite(last):
+                end_s = max(end_s, float(last))
+        return end_s
 
     def annotation(self, label: str) -> Annotation | None:
         """The first annotation named ``label`` (case and surrounding spaces ignored)."""

@@ -178,6 +178,9 @@ class _Validator:
         self._guarded("/", self._check_required, instances, set(paths))
         for check in self.spec.checks:
             self._run_check(check, instances)
+        for p in paths:
+            if re.fullmatch(r"/trials/[^/]+/annotations", p):
+                self._guarded(p, self._check_annotations_in_trial, p)
         for p in paths:  # every chunk once, so a damaged one is reported wherever it is
             if p not in self.read and p not in self.verified:
                 self._guarded(p, self._read_through, p)
@@ -319,41 +322,41 @@ class _Validator:
         kind = rule.get("type")
         value = _plain(value)
         if kind == "string" and not isinstance(value, str):
-            self.fail(where, f"value {value!r} is not a string")
+            self.fail(where, f"value {_short(value)} is not a string")
             return
         if kind == "integer" and (not isinstance(value, (int, np.integer))
                                   or isinstance(value, bool)):
-            self.fail(where, f"value {value!r} is not an integer")
+            self.fail(where, f"value {_short(value)} is not an integer")
             return
         if kind == "number":
             if not isinstance(value, (int, float, np.number)) or isinstance(value, bool):
-                self.fail(where, f"value {value!r} is not a number")
+                self.fail(where, f"value {_short(value)} is not a number")
                 return
             if not np.isfinite(value):  # JSON numbers are finite; so are the schema's
-                self.fail(where, f"value {value!r} is not a finite number")
+                self.fail(where, f"value {_short(value)} is not a finite number")
                 return
         if kind == "string_or_number" and not isinstance(value, (str, int, float, np.number)):
-            self.fail(where, f"value {value!r} is not a string or a number")
+            self.fail(where, f"value {_short(value)} is not a string or a number")
             return
         if kind == "integer_array":
             arr = np.atleast_1d(np.asarray(value))
             if arr.dtype.kind not in "iu":
-                self.fail(where, f"value {value!r} is not an array of integers")
+                self.fail(where, f"value {_short(value)} is not an array of integers")
             return
         if "const" in rule and value != rule["const"]:
-            self.fail(where, f"value {value!r}, expected {rule['const']!r}")
+            self.fail(where, f"value {_short(value)}, expected {rule['const']!r}")
         if "enum" in rule:
             allowed = self.spec.enums[rule["enum"]]
             if value not in allowed:
-                self.fail(where, f"value {value!r} is not one of {allowed}")
+                self.fail(where, f"value {_short(value)} is not one of {allowed}")
         if "pattern" in rule and not re.match(rule["pattern"], value):
-            self.fail(where, f"value {value!r} does not match {rule['pattern']}")
+            self.fail(where, f"value {_short(value)} does not match {rule['pattern']}")
         if "minimum" in rule and not value >= rule["minimum"]:
-            self.fail(where, f"value {value!r} is below the minimum {rule['minimum']}")
+            self.fail(where, f"value {_short(value)} is below the minimum {rule['minimum']}")
         if "maximum" in rule and not value <= rule["maximum"]:
-            self.fail(where, f"value {value!r} is above the maximum {rule['maximum']:g}")
+            self.fail(where, f"value {_short(value)} is above the maximum {rule['maximum']:g}")
         if "exclusive_minimum" in rule and not value > rule["exclusive_minimum"]:
-            self.fail(where, f"value {value!r} must be above {rule['exclusive_minimum']}")
+            self.fail(where, f"value {_short(value)} must be above {rule['exclusive_minimum']}")
         if "ref" in rule:
             target = rule["ref"].replace("{value}", str(value))
             if target not in self.h5 or not isinstance(self.h5[target], h5py.Group):
@@ -634,6 +637,45 @@ class _Validator:
             self.fail(p, f"row {i} ends at {_plain(end[i])!r} s, before it starts "
                          f"({other.rsplit('/', 1)[1]} = {_plain(start[i])!r} s)")
 
+    def _trial_end_s(self, trial: h5py.Group) -> float:
+        """A trial's end, seconds: the latest of ``duration_s``, the last event and each
+        stream's last sample (0 when none is readable; those are reported elsewhere)."""
+        ends = [0.0]
+        dur = _plain(trial.attrs.get("duration_s"))
+        if isinstance(dur, (int, float)) and not isinstance(dur, bool) and np.isfinite(dur):
+            ends.append(float(dur))
+        ev = trial.get("events")
+        if isinstance(ev, h5py.Group) and isinstance(ev.get("t"), h5py.Dataset):
+            t = ev["t"]
+            origin = _plain(ev.attrs.get("t_origin_us", ev.attrs.get("ms_index_origin_us")))
+            if t.ndim == 1 and t.shape[0] and t.dtype.kind in "iu" \
+                    and isinstance(origin, (int, np.integer)):
+                ends.append((int(t[-1]) + 1 - int(origin)) * 1e-6)
+        signals = trial.get("signals")
+        for stream in signals.values() if isinstance(signals, h5py.Group) else []:
+            t_s = stream.get("t_s") if isinstance(stream, h5py.Group) else None
+            if isinstance(t_s, h5py.Dataset) and t_s.ndim == 1 and t_s.shape[0] \
+                    and t_s.dtype.kind in "iuf" and np.isfinite(t_s[-1]):
+                ends.append(float(t_s[-1]))
+        return max(ends)
+
+    def _check_annotations_in_trial(self, p: str) -> None:
+        """No annotation starts after the trial's end by more than 60 s plus the trial's
+        length (as the reader: ``ANNOTATION_SLACK_S`` of store/trials.py)."""
+        group = self.h5[p]
+        start = group.get("start_s") if isinstance(group, h5py.Group) else None
+        if not isinstance(start, h5py.Dataset) or not self._numeric(start, p) \
+                or start.ndim != 1:
+            return  # reported by the node rules
+        end_s = self._trial_end_s(self.h5[p.rsplit("/", 1)[0]])
+        starts = np.asarray(start[()], dtype=np.float64)
+        late = np.flatnonzero(starts > 2 * end_s + 60.0)
+        if end_s > 0 and late.size:
+            i = int(late[0])
+            self.fail(f"{p}/start_s", f"row {i} starts at {float(starts[i])!r} s, after the "
+                                      f"trial's end ({end_s:g} s: its duration_s, last event "
+                                      "or last sample)")
+
     def _check_columns_same_length(self, group: h5py.Group, p: str) -> None:
         """A table group (one row per trial): every dataset is a column of one length."""
         if not isinstance(group, h5py.Group):
@@ -697,6 +739,17 @@ def _first(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.reshape(-1)[0] if value.size else value
     return value
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    """A value's repr on one line, at most ``limit`` characters (an array attribute's repr
+    spans lines)."""
+    if isinstance(value, np.ndarray):
+        text = f"array of {value.dtype} {value.shape} " + " ".join(
+            np.array2string(value.reshape(-1)[:8], separator=",", threshold=8).split())
+    else:
+        text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _plain(value: Any) -> Any:

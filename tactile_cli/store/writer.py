@@ -137,7 +137,7 @@ def validate_and_swap(tmp: Path, dest: Path, *, verified: Collection[str] = (), 
     try:
         report = validate_file(tmp, verified=verified)
         if not report.ok:
-            lines = "; ".join(str(v) for v in report.violations[:5])
+            lines = "; ".join(" ".join(str(v).split()) for v in report.violations[:5])
             more = len(report.violations) - 5
             raise SchemaError(f"{breaks} ({lines}{f'; and {more} more' if more > 0 else ''}); "
                               f"{outcome}")

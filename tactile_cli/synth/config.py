@@ -249,8 +249,10 @@ def load_synth_config(path: str | Path | None) -> SynthConfig:
         return SynthConfig()
     path = Path(path)
     text, raw = read_yaml(path)
-    if raw is None:
-        raw = {}
+    if raw is None:  # an empty (or all-comment) file: a truncated config, not the defaults
+        raise InputError("empty config; a synth config is a YAML mapping of sections (levels, "
+                         "timing, fos, ...), see configs/synth_fos.yaml (leave the config out "
+                         "for the defaults)", path=path)
     if not isinstance(raw, dict):
         raise InputError("a synth config is a YAML mapping of sections (levels, timing, fos, "
                          "...); see configs/synth_fos.yaml", path=path)

@@ -72,11 +72,7 @@ CASES = _subset()
 
 #: case id -> failure class; every one still fails (strict xfail). Remove an entry once
 #: its run passes.
-XFAIL: dict[str, str] = {
-    "accumulate:events:labels-array": "multi-line (a numpy array's repr in the message)",
-    "grade:counts:sensor-rate-str": "accepted-corrupt (a string sample_rate_hz)",
-    "ingest:aedat4:truncate-0.999": "accepted-corrupt (an AEDAT4 file cut short)",
-}
+XFAIL: dict[str, str] = {}
 
 
 def _param(case: fuzz_corpus.Case):
