@@ -12,7 +12,11 @@ when a fix makes one pass, the XPASS fails the suite until the entry is removed 
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import json
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -49,10 +53,11 @@ def _selected(case: fuzz_corpus.Case, kind: str) -> bool:
     return digest % 100 < RATE_PERCENT.get(case.command, 0)
 
 
+WORK = Path(tempfile.gettempdir()) / f"tactile-fuzz-fast-{_source_key()}"
+
+
 def _corpus() -> fuzz_corpus.Corpus:
-    work = Path(tempfile.gettempdir()) / f"tactile-fuzz-fast-{_source_key()}"
-    runner.preload()
-    return fuzz_corpus.build_corpus(work, seed=SEED, n_random=1)
+    return fuzz_corpus.build_corpus(WORK, seed=SEED, n_random=1)
 
 
 CORPUS = _corpus()
@@ -92,8 +97,36 @@ def test_fast_subset_is_broad():
     assert listed <= {c.id for c in CASES}, "XFAIL names a case the subset does not run"
 
 
+def run_subset(ids: list[str], scratch: Path) -> dict[str, dict]:
+    """Run the cases ``ids`` in this (fresh) process: preload the CLI, then fork one child
+    per run; case id -> its outcome as a dict."""
+    runner.preload()
+    out = {}
+    for case in (c for c in CORPUS.cases if c.id in set(ids)):
+        one = scratch / str(len(out))
+        one.mkdir(parents=True)
+        out[case.id] = dataclasses.asdict(runner.run_case(CORPUS, case, one, timeout_s=60))
+    return out
+
+
+@pytest.fixture(scope="module")
+def outcomes(tmp_path_factory) -> dict[str, dict]:
+    """Every run of the subset, made by a fresh interpreter: forking the pytest process
+    would copy the threads of libraries other tests loaded (JAX warns that its children
+    may deadlock)."""
+    scratch = tmp_path_factory.mktemp("fuzz")
+    code = ("import json, sys; from pathlib import Path; "
+            "from tests.fuzz import test_fuzz_fast as t; "
+            f"print(json.dumps(t.run_subset(sys.argv[1:], Path({str(scratch)!r}))))")
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.run([sys.executable, "-c", code, *[c.id for c in CASES]], cwd=root,
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
 @pytest.mark.parametrize("case", [_param(c) for c in CASES])
-def test_damaged_input(case: fuzz_corpus.Case, tmp_path: Path):
-    result = runner.run_case(CORPUS, case, tmp_path, timeout_s=60)
+def test_damaged_input(case: fuzz_corpus.Case, outcomes: dict[str, dict]):
+    result = runner.Outcome(**outcomes[case.id])
     assert result.outcome in runner.OK, (
         f"{result.outcome} (exit {result.code}): {result.detail or result.first_stderr}")

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from .corpus import EITHER, REFUSE, Case
-from .runner import RunResult, classify, run_argv, tree_hash
+from .runner import RunResult, classify, tree_hash
 
 
 def _case(command: str = "info", expect: str = REFUSE) -> Case:
@@ -37,9 +37,22 @@ def test_classify(case, result, changed, left, expected):
 
 
 def test_run_argv_captures_exit_code_and_one_line(tmp_path: Path):
-    res = run_argv(["info", str(tmp_path / "nope.h5")], cwd=tmp_path, timeout_s=60)
-    assert res.code == 2
-    assert res.stderr.splitlines() == [f"tactile: error: {tmp_path / 'nope.h5'}: file not found"]
+    """In a fresh interpreter, as the fast subset runs (a fork of the pytest process would
+    copy the threads of libraries that other tests loaded)."""
+    import json
+    import subprocess
+    import sys
+
+    code = ("import json, sys; from pathlib import Path; from tests.fuzz.runner import run_argv; "
+            "r = run_argv(['info', sys.argv[1]], cwd=Path(sys.argv[2]), timeout_s=60); "
+            "print(json.dumps([r.code, r.stderr]))")
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "nope.h5"),
+                           str(tmp_path)], cwd=root, capture_output=True, text=True,
+                          timeout=300, check=True)
+    exit_code, stderr = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert exit_code == 2
+    assert stderr.splitlines() == [f"tactile: error: {tmp_path / 'nope.h5'}: file not found"]
 
 
 def test_tree_hash_sees_bytes_names_and_links(tmp_path: Path):
