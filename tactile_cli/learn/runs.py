@@ -157,13 +157,19 @@ def _read_json(path: Path, run: Path) -> Any:
         if path.is_symlink() or not run.joinpath(RUN_JSON).exists():
             raise missing_file_error(path)
         raise InputError(f"run folder has no {path.name}; {_RETRAIN}", path=run)
+    return _parse_json(path, _RETRAIN)
+
+
+def _parse_json(path: Path, redo: str) -> Any:
+    """The parsed JSON of ``path``; text that is not UTF-8 or not JSON is one InputError
+    naming the file (and line) that ends with ``redo``, what re-creates it."""
     try:
-        return json.loads(read_text(path, advice=f"the file is damaged: {_RETRAIN}"))
+        return json.loads(read_text(path, advice=f"the file is damaged: {redo}"))
     except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON ({exc.msg}): the file is damaged or cut; {_RETRAIN}",
+        raise InputError(f"not valid JSON ({exc.msg}): the file is damaged or cut; {redo}",
                          path=path, where=f"line {exc.lineno}, column {exc.colno}") from None
     except (ValueError, RecursionError) as exc:
-        raise InputError(f"not valid JSON ({_first_line(exc)}); {_RETRAIN}", path=path) from None
+        raise InputError(f"not valid JSON ({_first_line(exc)}); {redo}", path=path) from None
 
 
 def _finite_list(value: Any, key: str, n: int | None, path: Path, *,
@@ -333,13 +339,7 @@ def read_metrics(path: str | Path) -> dict[str, Any]:
     of format ``tactile-eval`` version 1 whose ``heads`` map each head to its metrics."""
     path = Path(path)
     redo = "re-create it with `tactile evaluate` (`overwrite=True`)"
-    try:
-        m = json.loads(read_text(path, advice=f"the file is damaged: {redo}"))
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON ({exc.msg}): the file is damaged or cut; {redo}",
-                         path=path, where=f"line {exc.lineno}, column {exc.colno}") from None
-    except (ValueError, RecursionError) as exc:
-        raise InputError(f"not valid JSON ({_first_line(exc)}); {redo}", path=path) from None
+    m = _parse_json(path, redo)
     if not isinstance(m, dict):
         raise InputError(f"metrics.json is not a JSON object; {redo}", path=path)
     if m.get("format") != EVAL_FORMAT:
