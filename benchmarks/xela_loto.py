@@ -1,23 +1,24 @@
 """Slip detection on the real Xela uSkin recordings, leave one trial out (issue 4, item 7).
 
 The 7 trials of ../shared/data/xela_slip (3 with slip, 196 slip steps out of 2,195) are
-ingested with configs/xela_slip.yaml. For every model family (configs/train_<family>_xela_
-slip.yaml) and every held-out trial, a copy of the HDF5 file gets split attributes (the
-held-out trial ``test``, the other 6 ``train``, no validation trial), the family is trained
-with :func:`tactile_cli.learn.train` and its per-step slip decisions on the held-out trial are
-kept. The decisions of the 7 folds are pooled into one confusion matrix per family: slip
-precision, recall and F1, accuracy, with 95 % intervals (Wilson on the pooled counts for
-precision, recall and accuracy; a bootstrap over trials for F1 and accuracy, since steps of
-one trial are not independent). Cost: training time per fold and the batch-1 latency per
-window of the last fold's model (1 thread, :func:`tactile_cli.learn.measure_latency`).
+ingested with configs/xela_slip.yaml. Every model family (configs/train_<family>_xela_
+slip.yaml) is cross-validated leave-one-trial-out exactly as ``tactile train CONFIG --data
+xela.h5 --cv loto`` and ``tactile evaluate RUN`` do (:func:`tactile_cli.learn.cv.train_cv`,
+:func:`tactile_cli.learn.evaluate.evaluate`): one model per held-out trial, 6 training
+trials, no validation trial. The per-step decisions of the 7 folds are pooled into one
+confusion matrix per family: slip precision, recall and F1, accuracy, with 95 % intervals
+(Wilson on the pooled counts for precision, recall and accuracy; a bootstrap over trials for
+F1 and accuracy, since steps of one trial are not independent). Cost: training time per fold
+and the batch-1 latency per window of the first fold's model (1 thread,
+:func:`tactile_cli.learn.measure_latency`).
 
 Writes benchmarks/figures/xela_loto.json and xela_loto.png (slip F1 against batch-1
 latency, the chart of ``tactile compare``)::
 
     tactile ingest ../shared/data/xela_slip --mapping configs/xela_slip.yaml --out /tmp/xela.h5
     .venv/bin/python benchmarks/xela_loto.py --data /tmp/xela.h5
-    .venv/bin/python benchmarks/xela_loto.py --data /tmp/xela.h5 --families lstm --folds 2 \\
-        --epochs 1 --out /tmp/loto            # a quick check
+    .venv/bin/python benchmarks/xela_loto.py --data /tmp/xela.h5 --families mlp --epochs 1 \\
+        --out /tmp/loto                        # a quick check
 
 Without ``--data`` the recordings under ``--source`` are ingested into a temporary file.
 """
@@ -25,10 +26,10 @@ Without ``--data`` the recordings under ``--source`` are ingested into a tempora
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -36,25 +37,16 @@ import time
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tactile_cli._version import __version__  # noqa: E402
-from tactile_cli.learn import (  # noqa: E402
-    classification_metrics,
-    load_config,
-    load_run,
-    make_windows,
-    measure_latency,
-    predict,
-    read_trials,
-    runs,  # noqa: E402
-    train,
-)
+from tactile_cli.learn import load_config, runs  # noqa: E402
 from tactile_cli.learn.compare import RunPoint, compare_points, plot_comparison  # noqa: E402
+from tactile_cli.learn.cv import train_cv  # noqa: E402
+from tactile_cli.learn.evaluate import evaluate  # noqa: E402
 from tactile_cli.store.writer import sha256_of, utc_now  # noqa: E402
 
 FAMILIES = ("lstm", "cnn1d", "fnn", "mlp")
@@ -106,78 +98,49 @@ def ingest(source: Path, tmp: Path) -> Path:
     return tmp / "xela.h5"
 
 
-def trial_names(path: Path) -> list[str]:
-    with h5py.File(path, "r") as f:
-        return sorted(f["trials"].keys())
+def per_trial_counts(predictions: Path, classes: list[str]) -> list[dict[str, Any]]:
+    """tp, fp, fn, tn of the slip class per held-out trial, from an evaluation's
+    predictions.csv (one row per step: trial, slip_true, slip_pred)."""
+    rows: dict[str, dict[str, Any]] = {}
+    with open(predictions, newline="", encoding="utf-8") as f:
+        for r in csv.DictReader(f):
+            t = rows.setdefault(r["trial"].split("/", 1)[-1],
+                                {"tp": 0, "fp": 0, "fn": 0, "tn": 0})
+            true, pred = r[f"{SLIP}_true"] == SLIP, r[f"{SLIP}_pred"] == SLIP
+            t["tp" if true and pred else "fn" if true else "fp" if pred else "tn"] += 1
+    out = []
+    for trial in sorted(rows):
+        c = rows[trial]
+        n = sum(c.values())
+        out.append({"trial": trial, "n_steps": n, "slip_steps": c["tp"] + c["fn"], **c,
+                    "slip_f1": counts_f1(c["tp"], c["fp"], c["fn"]) if c["tp"] + c["fn"]
+                    else None, "accuracy": (c["tp"] + c["tn"]) / n})
+    return out
 
 
-def fold_copy(src: Path, dst: Path, held_out: str) -> Path:
-    """A copy of ``src`` whose trials carry split attributes: ``held_out`` test, the rest
-    train."""
-    shutil.copyfile(src, dst)
-    with h5py.File(dst, "r+") as f:
-        for name, group in f["trials"].items():
-            group.attrs["split"] = "test" if name == held_out else "train"
-    return dst
-
-
-def run_family(family: str, data: Path, trials: list[str], folds: list[str], tmp: Path, *,
-               seed: int, epochs: int | None) -> dict[str, Any]:
+def run_family(family: str, data: Path, tmp: Path, *, seed: int, epochs: int | None,
+               jobs: int | None) -> dict[str, Any]:
+    """``tactile train --cv loto`` and ``tactile evaluate`` of one family, through the
+    library; the slip-class figures of the pooled held-out decisions."""
     cfg_path = ROOT / "configs" / f"train_{family}_xela_slip.yaml"
     cfg = load_config(cfg_path).with_overrides(seed=seed, epochs=epochs)
-    y_true: list[np.ndarray] = []
-    y_pred: list[np.ndarray] = []
-    per_trial: list[dict[str, Any]] = []
-    classes: list[str] = []
-    last_model = None
-    last_windows = None
-    n_params = 0
-    size_mb = 0.0
-    for k, held in enumerate(folds):
-        copy = fold_copy(data, tmp / f"fold{k}.h5", held)
-        res = train(cfg, [copy], tmp / f"{family}_fold{k}", config_path=cfg_path,
-                    command="benchmarks/xela_loto.py")
-        run = load_run(res.run_dir)
-        head = next(h for h in run.heads if h.name == SLIP)
-        classes = list(head.classes)
-        test = [t for t in read_trials([copy], cfg.data) if t.trial == held]
-        ws = make_windows(test, cfg.data, run.heads, run.normalisation)
-        model = run.load_model()
-        pred = predict(model, ws)[SLIP].argmax(axis=1)
-        true = ws.targets[SLIP].astype(np.int64)
-        s = classes.index(SLIP)
-        tp = int(((pred == s) & (true == s)).sum())
-        fp = int(((pred == s) & (true != s)).sum())
-        fn = int(((pred != s) & (true == s)).sum())
-        tn = int(len(true) - tp - fp - fn)
-        per_trial.append({"trial": held, "n_steps": int(len(true)), "slip_steps": tp + fn,
-                          "tp": tp, "fp": fp, "fn": fn, "tn": tn,
-                          "slip_f1": counts_f1(tp, fp, fn) if tp + fn else None,
-                          "accuracy": (tp + tn) / len(true),
-                          "train_time_s": res.train_time_s, "epochs_run": len(res.history),
-                          "final_train_loss": res.history[-1].train_loss})
-        y_true.append(true)
-        y_pred.append(pred)
-        last_model, last_windows = model, ws.windows()
-        n_params, size_mb = res.n_params, res.size_mb
-        print(f"  {family} fold {k + 1}/{len(folds)} {held}: tp {tp} fp {fp} fn {fn} tn {tn} "
-              f"({res.train_time_s:.1f} s)", flush=True)
-        shutil.rmtree(res.run_dir)
-        copy.unlink()
-    assert last_model is not None and last_windows is not None
-    cm = classification_metrics(np.concatenate(y_true), np.concatenate(y_pred), classes,
-                                head=SLIP)
-    s = classes.index(SLIP)
-    slip = cm.per_class[s]
-    tp = sum(t["tp"] for t in per_trial)
-    fp = sum(t["fp"] for t in per_trial)
-    fn = sum(t["fn"] for t in per_trial)
-    tn = sum(t["tn"] for t in per_trial)
-    lat = measure_latency(last_model, last_windows, threads=1)
+    res = train_cv(cfg, [data], tmp / family, k="loto", jobs=jobs, config_path=cfg_path,
+                   command="benchmarks/xela_loto.py",
+                   on_fold=lambda i, s: print(f"  {family} fold {i}: {s['train_time_s']:.1f} s",
+                                              flush=True))
+    ev = evaluate(res.run_dir, None, threads=1, command="benchmarks/xela_loto.py")
+    cm = next(h for h in ev.heads if h.head == SLIP)
+    classes = list(cm.classes)
+    slip = cm.per_class[classes.index(SLIP)]
+    per_trial = per_trial_counts(ev.out_dir / runs.PREDICTIONS_CSV, classes)
+    tp, fp, fn, tn = (sum(t[k] for t in per_trial) for k in ("tp", "fp", "fn", "tn"))
+    times = [f["train_time_s"] for f in res.folds]
+    lat = ev.latency
+    assert lat is not None
     return {
         "family": family, "config": str(cfg_path.relative_to(ROOT)),
         "config_resolved": json.loads(json.dumps(cfg.model_dump(mode="json"))),
-        "n_params": n_params, "size_mb": size_mb,
+        "n_params": ev.n_params, "size_mb": ev.size_mb,
         "pooled": {"classes": classes, "confusion_matrix": cm.confusion_matrix,
                    "n": cm.n, "tp": tp, "fp": fp, "fn": fn, "tn": tn,
                    "slip_precision": slip.precision, "slip_recall": slip.recall,
@@ -186,10 +149,9 @@ def run_family(family: str, data: Path, trials: list[str], folds: list[str], tmp
                    "slip_recall_wilson95": wilson(tp, tp + fn),
                    "accuracy_wilson95": wilson(tp + tn, cm.n)},
         "bootstrap_over_trials95": bootstrap_over_trials(per_trial, reps=2000, seed=seed),
+        "warnings": ev.warnings,
         "per_trial": per_trial,
-        "train_time_s": {"total": sum(t["train_time_s"] for t in per_trial),
-                         "per_fold_mean": float(np.mean([t["train_time_s"]
-                                                         for t in per_trial]))},
+        "train_time_s": {"total": float(sum(times)), "per_fold_mean": float(np.mean(times))},
         "latency": lat.as_dict(),
     }
 
@@ -222,8 +184,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="ingested xela.h5 (default: ingest --source into a temporary file)")
     ap.add_argument("--source", type=Path, default=ROOT.parent / "shared" / "data" / "xela_slip")
     ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=FAMILIES)
-    ap.add_argument("--folds", type=int, default=None,
-                    help="hold out only the first N trials (quick checks; default all)")
+    ap.add_argument("--jobs", type=int, default=None,
+                    help="folds trained at once (default: the cores)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--epochs", type=int, default=None, help="override optim.epochs")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "figures")
@@ -237,14 +199,13 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {data}: data file not found; ingest it first (see --help)",
                   file=sys.stderr)
             return 2
-        trials = trial_names(data)
-        folds = trials if args.folds is None else trials[:args.folds]
         results = []
         for fam in args.families:
-            print(f"{fam}: {len(folds)} folds", flush=True)
-            results.append(run_family(fam, data, trials, folds, tmp, seed=args.seed,
-                                      epochs=args.epochs))
+            print(f"{fam}: leave one trial out", flush=True)
+            results.append(run_family(fam, data, tmp, seed=args.seed, epochs=args.epochs,
+                                      jobs=args.jobs))
         data_sha = sha256_of(data)
+        trials = [t["trial"] for t in results[0]["per_trial"]]
     summary = chart(results, args.out / "xela_loto.png", "xela_slip")
     record = {
         "format": "tactile-xela-loto", "format_version": 1, "tool_version": __version__,
@@ -252,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         if argv is None else "main(" + " ".join(argv) + ")",
         "data": {"path": str(args.data) if args.data else f"ingested from {args.source}",
                  "sha256": data_sha, "trials": trials},
-        "seed": args.seed, "epochs_override": args.epochs, "folds": folds,
+        "seed": args.seed, "epochs_override": args.epochs, "folds": trials,
         "metric": "slip-class F1 of the pooled held-out decisions (one per step)",
         "families": results, "chart_summary": summary,
         "wall_time_s": time.perf_counter() - started,

@@ -43,6 +43,10 @@ _VERBS = {
     "estimate_slip_rates": "spatial.slip_rate",
     "write_centroid_file": "spatial.stream",
     "synthesize": "synth",
+    # the accelerometer-fingertip chain (paper 001)
+    "simulate_vibro_slip": "accel.simulate",
+    "prepare_file": "accel.prepare",
+    "detection_delay": "accel.delay",
     # methods any stream enters
     "fit_fos_file": "fos.fit_file",
     "grade_trials": "grade.grading",

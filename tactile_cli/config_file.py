@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import errno
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -193,6 +193,29 @@ def read_yaml(path: str | Path, what: str = "config file") -> tuple[str, Any]:
     return text, parse_yaml(text, path)
 
 
-__all__ = ["check_fits_in_memory", "decode_utf8", "format_bytes", "key_line",
+def describe_validation(err: Mapping[str, Any]) -> str:
+    """Default wording of one pydantic error: ``unknown key `a.b` `` or ``` `a.b`: msg```."""
+    key = ".".join(str(p) for p in err["loc"])
+    msg = str(err["msg"]).removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        return f"unknown key `{key}`"
+    return f"`{key}`: {msg}" if key else msg
+
+
+def validation_error(exc: Any, text: str, path: str | Path, *,
+                     describe: Callable[[dict[str, Any]], str] = describe_validation
+                     ) -> InputError:
+    """The one-line :class:`InputError` of a pydantic ``ValidationError`` of a YAML config:
+    the error to show (an unknown key first, since a misspelt key also leaves the intended
+    one at its default; else the deepest), worded by ``describe``, with the line of its key
+    in ``text``."""
+    err = max(exc.errors(), key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
+    keys = tuple(part for part in err["loc"] if isinstance(part, str | int))
+    line = key_line(text, keys) if keys else None
+    return InputError(describe(err), path=path, where=None if line is None else f"line {line}")
+
+
+__all__ = ["check_fits_in_memory", "decode_utf8", "describe_validation", "format_bytes",
+           "key_line",
            "machine_memory_bytes", "missing_file_error", "os_error", "parse_yaml", "read_bytes",
-           "read_config_text", "read_text", "read_yaml"]
+           "read_config_text", "read_text", "read_yaml", "validation_error"]

@@ -14,9 +14,10 @@ ROOT = Path(tactile_cli.__file__).parent
 
 #: Modules at the top of the package that every package may import (they import no
 #: package of ours but each other).
-FOUNDATIONS = {"errors", "progress", "interrupt", "config_file", "vocabulary", "_version"}
+FOUNDATIONS = {"errors", "progress", "interrupt", "config_file", "vocabulary", "natural",
+               "_version"}
 #: Method packages: any stream may enter them.
-METHODS = {"learn", "fos", "grade"}
+METHODS = {"learn", "fos", "grade", "spectral"}
 #: Third-party packages that one package alone may import, and that package.
 OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
           "jax": {"fos"}, "optimistix": {"fos"}}

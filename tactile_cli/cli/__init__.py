@@ -6,14 +6,22 @@ calls one library function and prints. Commands are registered here.
 
 from __future__ import annotations
 
-from typing import Annotated
+import os
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Annotated, Any
 
 import typer
+from typer import rich_utils
+from typer.core import TyperGroup
 
 from .._version import __version__
+from . import accel_prepare as _accel_prepare
 from . import accumulate as _accumulate
 from . import centroids as _centroids
 from . import compare as _compare
+from . import detect_delay as _detect_delay
 from . import evaluate as _evaluate
 from . import fit_fos as _fit_fos
 from . import frames as _frames
@@ -30,7 +38,50 @@ from . import synth as _synth
 from . import train as _train
 from . import validate as _validate
 
+#: Columns of ``--help`` when stdout is not a terminal (a pipe, a file, a test) and neither
+#: ``COLUMNS`` nor ``TERMINAL_WIDTH`` is set: rich would use 80 and cut long paths and
+#: option descriptions with an ellipsis.
+HELP_WIDTH = 100
+
+
+def help_width() -> int | None:
+    """Columns for ``--help``: None (rich asks the terminal, or reads ``COLUMNS``) when
+    stdout is a terminal or ``COLUMNS`` is set; else the wider of :data:`HELP_WIDTH` and
+    the terminal that stderr or stdin is attached to (``tactile ingest --help | less``)."""
+    if sys.stdout.isatty() or os.environ.get("COLUMNS", "").isdigit():
+        return None
+    widths = [HELP_WIDTH]
+    for stream in (sys.stderr, sys.stdin):
+        try:
+            widths.append(os.get_terminal_size(stream.fileno()).columns)
+        except (AttributeError, ValueError, OSError):  # not a terminal, or no file number
+            pass
+    return max(widths)
+
+
+@contextmanager
+def _help_rendered_wide() -> Iterator[None]:
+    """Typer renders help with a rich console of ``rich_utils.MAX_WIDTH`` columns (its
+    ``TERMINAL_WIDTH`` setting, else the terminal's, else 80); set it for one command."""
+    before = rich_utils.MAX_WIDTH
+    if before is None:
+        rich_utils.MAX_WIDTH = help_width()
+    try:
+        yield
+    finally:
+        rich_utils.MAX_WIDTH = before
+
+
+class _TactileGroup(TyperGroup):
+    """The ``tactile`` command group: help of every command at :func:`help_width`."""
+
+    def main(self, *args: Any, **kwargs: Any) -> Any:
+        with _help_rendered_wide():
+            return super().main(*args, **kwargs)
+
+
 app = typer.Typer(
+    cls=_TactileGroup,
     name="tactile",
     help="Tactile-sensing research from raw recordings to trained, evaluated models.",
     no_args_is_help=True,
@@ -116,6 +167,12 @@ app.command("compare", help="Accuracy against latency of several runs, Pareto fr
 app.command("perturb", context_settings=_MANY_FILES,
             help="Accuracy of runs on perturbed copies of the data, with breaking points.")(
     _perturb.perturb_command
+)
+app.command("accel-prepare", help="Accelerometer recordings as segments with a speed target "
+            "and an optional bandwidth limit (paper 001).")(_accel_prepare.accel_prepare_command)
+app.command("detect-delay", context_settings=_MANY_FILES,
+            help="Samples and inference time a run needs to detect slippage (paper 001).")(
+    _detect_delay.detect_delay_command
 )
 app.command("report", context_settings=_MANY_FILES,
             help="One self-contained HTML page of runs, comparison and data files.")(

@@ -30,12 +30,13 @@ def _fmt_s(value: float | None) -> str:
 
 def accumulate_command(
     file: Annotated[
-        Path, typer.Argument(help="A tactile HDF5 file with event trials.", show_default=False)
+        Path, typer.Argument(help="A tactile HDF5 file with event trials.", metavar="FILE",
+                             show_default=False)
     ],
     trial: Annotated[
         list[str] | None,
         typer.Option("--trial", "-t", help="Trial to accumulate; repeatable (default: every "
-                     "trial with events).", show_default=False),
+                     "trial with events).", metavar="TRIAL", show_default=False),
     ] = None,
     bin_ms: Annotated[
         float, typer.Option("--bin-ms", min=0.001, help="Bin width in ms (paper: 20).")
@@ -50,17 +51,17 @@ def accumulate_command(
     csv_out: Annotated[
         Path | None,
         typer.Option("--csv", help="Write one row per bin (counts, smoothed net, actions).",
-                     show_default=False),
+                     metavar="FILE", show_default=False),
     ] = None,
     out: Annotated[
         Path | None,
         typer.Option("--out", "-o", help="Write the count streams to a new HDF5 file.",
-                     show_default=False),
+                     metavar="FILE", show_default=False),
     ] = None,
     plot: Annotated[
         Path | None,
         typer.Option("--plot", help="Folder for one Fig. 10-style PNG per trial (created).",
-                     show_default=False),
+                     metavar="FOLDER", show_default=False),
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing --out/--csv files.")] = False,
     progress: Annotated[

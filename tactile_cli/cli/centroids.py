@@ -15,16 +15,16 @@ from .progress import RichProgress
 
 def centroids_command(
     file: Annotated[Path, typer.Argument(help="A tactile HDF5 file with event trials.",
-                                         show_default=False)],
+                                         metavar="FILE", show_default=False)],
     rois: Annotated[Path, typer.Option(
         help="ROI config: YAML (configs/rois_marker_scene.yaml) or a scene's scene.json; its "
              "centroid section sets polarity, median filter and bin width.",
-        show_default=False)],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.",
+        metavar="FILE", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", metavar="FILE",
                                       show_default=False)],
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", "-t", help="Trial to convert; repeatable (default: every trial with "
-        "events).", show_default=False)] = None,
+        "events).", metavar="TRIAL", show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
                        ] = False,

@@ -1,15 +1,20 @@
-"""`tactile compare RUN... [--data-name NAME] [--margin 0.5] [--metric accuracy] [--out DIR]
+"""`tactile compare RUN... [--data-name NAME] [--margin 0.5] [--metric accuracy] [--out FOLDER]
 [--json]`"""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from ..learn.compare import Comparison
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -39,20 +44,22 @@ def compare_command(
     data_name: Annotated[
         str | None,
         typer.Option("--data-name", help="Evaluation to compare (RUN/eval/<name>); default: "
-                     "the one every run has.", show_default=False),
+                     "the one every run has.", metavar="NAME", show_default=False),
     ] = None,
     margin: Annotated[
         float, typer.Option(min=0.0, help="Accuracy margin in percentage points: the model "
                             "this scene needs is the smallest within it of the best.")
     ] = 0.5,
     metric: Annotated[
-        str, typer.Option(help="Score to compare: accuracy, macro_f1 or f1:<class> (e.g. "
-                          "f1:slip) of the primary head.")
+        str, typer.Option(help="Score to compare: accuracy (per window), macro_f1, "
+                          "trial_accuracy (majority vote per trial, for trial-level targets) "
+                          "or f1:<class> (e.g. f1:slip) of the primary head.")
     ] = "accuracy",
     out: Annotated[
         Path | None,
         typer.Option("--out", "-o", help="Folder for compare.png (accuracy against latency, "
-                     "Pareto front), compare.csv and compare.json.", show_default=False),
+                     "Pareto front), compare.csv and compare.json.", metavar="FOLDER",
+                     show_default=False),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print compare.json to stdout.")
                        ] = False,
@@ -63,9 +70,8 @@ def compare_command(
 
     def body() -> None:
         from rich.console import Console
-        from rich.table import Table
 
-        from ..learn.compare import compare, comparison_record, table_rows, write_comparison
+        from ..learn.compare import compare, comparison_record, write_comparison
         from ..learn.runs import dumps
 
         cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric)
@@ -75,24 +81,47 @@ def compare_command(
         if as_json:
             typer.echo(dumps(comparison_record(cmp)))
             return
-        console = Console(width=None if sys.stdout.isatty() else 140)
-        table = Table(title=f"{cmp.metric_label} against cost on {cmp.data_name}")
-        for col in ("run", f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms",
-                    "p95 ms", "windows/s", "parameters", "MB", "Pareto", "in margin", ""):
-            table.add_column(col, justify="left" if col == "run" else "right")
-        for row in table_rows(cmp):
-            lat = row["latency_ms_median"]
-            table.add_row(
-                row["label"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
-                "" if lat is None else f"{lat:.3f}",
-                "" if row["latency_ms_p95"] is None else f"{row['latency_ms_p95']:.3f}",
-                "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
-                f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
-                "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
-                "needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
+        table = _table(cmp)
+        # on a terminal the run names fold over lines where it is narrow; into a file or a
+        # pipe the table is as wide as it needs, so no name is cut or folded
+        console = Console(width=None if sys.stdout.isatty() else _natural_width(table))
         console.print(table)
         typer.echo(cmp.summary())
         if files is not None:
             typer.echo(f"wrote {files.png}, {files.csv.name}, {files.json.name}")
 
     run_guarded(body, flags=FLAGS)
+
+
+def _table(cmp: Comparison) -> Table:
+    """The comparison table; each run named by the part of its folder that tells it apart
+    from the others (:func:`~tactile_cli.learn.compare.distinct_run_paths`)."""
+    from rich.table import Table
+
+    from ..learn.compare import distinct_run_paths, table_rows
+
+    rows = table_rows(cmp)
+    table = Table(title=f"{cmp.metric_label} against cost on {cmp.data_name}")
+    table.add_column("run", overflow="fold")
+    table.add_column("family")
+    for col in (f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms", "p95 ms",
+                "windows/s", "parameters", "MB", "Pareto", "in margin", ""):
+        table.add_column(col, justify="right")
+    for row, name in zip(rows, distinct_run_paths([row["run"] for row in rows]), strict=True):
+        lat = row["latency_ms_median"]
+        table.add_row(
+            name, row["family"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
+            "" if lat is None else f"{lat:.3f}",
+            "" if row["latency_ms_p95"] is None else f"{row['latency_ms_p95']:.3f}",
+            "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
+            f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
+            "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
+            "needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
+    return table
+
+
+def _natural_width(table: Table) -> int:
+    """Columns the table takes when nothing wraps."""
+    from rich.console import Console
+
+    return Console(width=10_000).measure(table).maximum

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from ..learn.evaluate import EvalResult
 from .train import data_files
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -17,17 +23,21 @@ FLAGS: dict[str, Flag] = {
     "data_paths": "--data FILE",
     "split": "--split",
     "threshold": "--threshold",
+    "overwrite": "--overwrite",
+    "name": "--name",
 }
 
 
 def evaluate_command(
     ctx: typer.Context,
     run: Annotated[Path, typer.Argument(help="Run folder written by `tactile train`.",
-                                        show_default=False)],
+                                        show_default=False, metavar="RUN")],
     data: Annotated[
         list[Path] | None,
         typer.Option("--data", "-d", help="Tactile HDF5 file(s) to evaluate on; repeat the "
-                     "option or list several files after it.", show_default=False),
+                     "option or list several files after it. A cross-validated run (train "
+                     "--cv) needs none: each fold is scored on its held-out trials.",
+                     show_default=False, metavar="FILE"),
     ] = None,
     split: Annotated[
         str, typer.Option(help="all: every trial; test: the trials the run's split rule puts "
@@ -44,6 +54,8 @@ def evaluate_command(
     latency: Annotated[
         bool, typer.Option("--latency/--no-latency", help="Measure latency and throughput.")
     ] = True,
+    overwrite: Annotated[
+        bool, typer.Option(help="Replace an existing RUN/eval/<name> folder.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
     perturb: Annotated[
         bool, typer.Option("--perturb", help="Also re-evaluate on perturbed copies of the data "
@@ -67,12 +79,16 @@ def evaluate_command(
         from rich.console import Console
         from rich.table import Table
 
-        from ..learn.evaluate import ClassificationMetrics, evaluate
-        from ..learn.runs import dumps
+        from ..learn.evaluate import evaluate
+        from ..learn.runs import dumps, read_run_info
 
         files = data_files(data, ctx)
-        if not files:
+        cross_validated = read_run_info(run).get("cv") is not None
+        if not files and not cross_validated:
             raise InputError("no data files; give --data FILE...")
+        if perturb and cross_validated:
+            raise InputError("--perturb needs one model: give a fold's folder "
+                             "(RUN/folds/fold_00) instead of the cross-validated run")
         if split not in ("all", "test"):
             raise InputError(f"--split must be all or test, got {split!r}")
         if perturb:
@@ -80,7 +96,7 @@ def evaluate_command(
 
             parse_threshold(threshold)  # a bad value fails before any work
         result = evaluate(run, files, split=split, name=name,  # type: ignore[arg-type]
-                          latency=latency, threads=threads)
+                          latency=latency, threads=threads, overwrite=overwrite)
         if as_json:
             payload = result.as_dict()
             if perturb:
@@ -93,25 +109,7 @@ def evaluate_command(
             typer.echo(dumps(payload))
         else:
             console = Console(width=None if sys.stdout.isatty() else 120)
-            console.print(f"[bold]{result.run}[/] ({result.family}) on {result.n_trials} "
-                          f"trials, {result.n_windows:,} windows, split {result.split}")
-            for m in result.heads:
-                if isinstance(m, ClassificationMetrics):
-                    table = Table(title=f"{m.head}: accuracy {100 * m.accuracy:.2f} %")
-                    for col in ("class", "precision", "recall", "F1", "support"):
-                        table.add_column(col, justify="left" if col == "class" else "right")
-                    for c in m.per_class:
-                        table.add_row(c.name, f"{c.precision:.5f}", f"{c.recall:.5f}",
-                                      f"{c.f1:.5f}", f"{c.support:,}")
-                    if m.accuracy_excluding_boundaries is not None:
-                        table.caption = (
-                            f"without the {m.n_near_boundary:,} windows within "
-                            f"{m.boundary_margin} sample(s) of a label change: "
-                            f"{100 * m.accuracy_excluding_boundaries:.2f} %")
-                    console.print(table)
-                else:
-                    console.print(f"{m.head}: MAE {m.mae:.4g}, RMSE {m.rmse:.4g} ({m.n:,} "
-                                  "windows)")
+            print_metrics(console, result)
             cost = Table(title="Cost on this machine")
             for col in ("parameters", "size (MB)", "batch-1 median (ms)", "batch-1 p95 (ms)",
                         "windows/s", "threads"):
@@ -129,7 +127,7 @@ def evaluate_command(
 
                 perturb_and_print([run], files, kinds=perturb_kinds, threshold=threshold,
                                   split=split, name=name, notes=False)
-        for note in result.notes:
+        for note in [*result.notes, *result.warnings]:
             print(f"tactile: warning: {note}", file=sys.stderr)
         if result.overlaps_training and split == "all":
             print(f"tactile: warning: {', '.join(result.overlaps_training)} was used to train "
@@ -137,3 +135,71 @@ def evaluate_command(
                   file=sys.stderr)
 
     run_guarded(body, flags=FLAGS)
+
+
+def _pct(value: float | None) -> str:
+    return "n/a" if value is None or math.isnan(value) else f"{100 * value:.2f} %"
+
+
+def print_metrics(console: Console, result: EvalResult) -> None:
+    """The per-head tables (support always shown, absent classes flagged), intervals,
+    per-trial votes and, for a cross-validated run, the per-fold spread."""
+    from rich.table import Table
+
+    from ..learn.evaluate import ClassificationMetrics
+    from ..learn.trial_metrics import fmt_interval
+
+    what = "held-out trials of every fold" if result.cv else "trials"
+    console.print(f"[bold]{result.run}[/] ({result.family}) on {result.n_trials} {what}, "
+                  f"{result.n_windows:,} windows, split {result.split}")
+    if result.origin:
+        from ..store.origin import describe_origin
+
+        console.print(f"data: {describe_origin(result.origin)}")
+    for m in result.heads:
+        if not isinstance(m, ClassificationMetrics):
+            console.print(f"{m.head}: MAE {m.mae:.4g}, RMSE {m.rmse:.4g} ({m.n:,} windows)")
+            continue
+        console.print(f"[bold]{m.head}[/]: accuracy {_pct(m.accuracy)} per window (95 % CI "
+                      f"{fmt_interval(m.accuracy_ci95)}, bootstrap over {m.n_trials} trials), "
+                      f"macro F1 {_num(m.macro_f1)} (95 % CI "
+                      f"{fmt_interval(m.macro_f1_ci95, 1.0, 3)})")
+        table = Table()
+        for col in ("class", "precision", "recall", "F1", "support"):
+            table.add_column(col, justify="left" if col == "class" else "right")
+        for c in m.per_class:
+            if c.absent:
+                table.add_row(c.name, f"{c.precision:.5f}", "-", "-", "0 (absent)")
+            else:
+                table.add_row(c.name, f"{c.precision:.5f}", f"{c.recall:.5f}", f"{c.f1:.5f}",
+                              f"{c.support:,}")
+        captions = []
+        if m.accuracy_excluding_boundaries is not None:
+            captions.append(f"without the {m.n_near_boundary:,} windows within "
+                            f"{m.boundary_margin} sample(s) of a label change: "
+                            f"{_pct(m.accuracy_excluding_boundaries)}")
+        if any(c.absent for c in m.per_class):
+            captions.append("absent classes are left out of the macro F1")
+        table.caption = "; ".join(captions) or None
+        console.print(table)
+        if m.per_trial:
+            v = m.per_trial
+            console.print(f"{m.head} per trial ({v['n_trials']} trials): majority vote "
+                          f"{_pct(v['majority_accuracy'])} (95 % CI "
+                          f"{fmt_interval(v['majority_accuracy_ci95'])}), mean probability "
+                          f"{_pct(v['mean_probability_accuracy'])} (95 % CI "
+                          f"{fmt_interval(v['mean_probability_accuracy_ci95'])})")
+    if result.cv:
+        cv = result.cv
+        line = (f"{cv['n_folds']} folds ({cv['mode']}"
+                + (f" by {cv['by']}" if cv.get("by") else "") + "): accuracy per fold "
+                f"{_pct(cv.get('accuracy_mean'))} +- {_pct(cv.get('accuracy_std'))}, macro F1 "
+                f"{_num(cv.get('macro_f1_mean'))} +- {_num(cv.get('macro_f1_std'))}")
+        if cv.get("per_trial_accuracy_mean") is not None:
+            line += (f", per-trial accuracy {_pct(cv['per_trial_accuracy_mean'])} +- "
+                     f"{_pct(cv.get('per_trial_accuracy_std'))}")
+        console.print(line + " (mean +- sample std over folds)")
+
+
+def _num(value: float | None) -> str:
+    return "n/a" if value is None or math.isnan(value) else f"{value:.4f}"

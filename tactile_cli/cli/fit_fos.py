@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ..errors import InputError
-from ..fos.compile_cache import enable_compilation_cache
+from ..fos.compile_cache import cache_root, enable_compilation_cache
 from ._errors import Flag, run_guarded, seconds_as_ms
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -73,13 +73,30 @@ def _summary(records: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def _units_of(records: list[dict[str, Any]]) -> str | None:
+    """The one unit of every row, or None when the rows differ (curves in several units)."""
+    units = {r["units"] for r in records}
+    return units.pop() if len(units) == 1 else None
+
+
 def _print_region(console: Console, region: str, model: str, records: list[dict[str, Any]],
                   summary: dict[str, Any], group: str | None) -> None:
     equation = {"pulse": "eq. 16", "ramp": "eq. 17"}.get(model, "eq. 16, T -> inf")
     table = Table(title=f"{region}: {model} ({equation})")
-    for col, justify in (("trial", "left"), ("force", "right"), ("alpha (ev/bin)", "right"),
-                         ("tau (s)", "right"), ("T (s)", "right"), ("R", "right"),
-                         ("status", "left"), ("steps", "right"), ("order", "left")):
+    units = _units_of(records)
+    short = {"events/bin": "ev/bin"}.get(units or "", units)
+    columns = [("trial", "left"), ("force", "right"),
+               (f"alpha ({short})" if units else "alpha", "right"),
+               ("tau (s)", "right"), ("T (s)", "right"), ("R", "right"),
+               (f"s ({short})" if units else "s", "right"),
+               (f"RSS ({short})^2" if units else "RSS", "right"),
+               ("status", "left"), ("steps", "right"), ("order", "left")]
+    if units is None:
+        columns.insert(2, ("units", "left"))
+    has_force = any(r.get("force_level", r.get("force_grade")) is not None for r in records)
+    if not has_force:
+        columns.pop(1)
+    for col, justify in columns:
         table.add_column(col, justify=justify)
     failed = [r for r in records if r["status"] != "converged"]
     shown = records
@@ -89,14 +106,21 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
     for r in shown:
         bad = r["status"] != "converged"
         force = r.get("force_level", r.get("force_grade", ""))
-        table.add_row(
+        cells = [
             str(r["trial"]), "" if force is None else str(force),
-            _pm(r["alpha"], r["alpha_se"], ".1f"), _pm(r["tau_s"], r["tau_se"], ".4f"),
+            _pm(r["alpha"], r["alpha_se"], ".1f" if r["units"] == "events/bin" else ".4g"),
+            _pm(r["tau_s"], r["tau_se"], ".4f"),
             _pm(r["duration_s"], r["duration_se"], ".3f") if model == "pulse" else "",
             "-" if r["pearson_r"] is None else f"{r['pearson_r']:.5f}",
+            _pm(r["residual_std"], None, ".4g"), _pm(r["rss"], None, ".4g"),
             f"[red]{r['status']}[/]" if bad else r["status"], str(r["n_steps"]),
             r["order_verdict"],
-        )
+        ]
+        if units is None:
+            cells.insert(2, r["units"])
+        if not has_force:
+            cells.pop(1)
+        table.add_row(*cells)
     if len(shown) < len(records):
         table.caption = (f"{len(records) - len(shown)} converged trials not shown; "
                          "use --json or --csv for all")
@@ -115,8 +139,9 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
 
 
 def fit_fos_command(
-    file: Annotated[Path, typer.Argument(
-        help="A tactile HDF5 file, or a two-column CSV (header, then t in s, x).",
+    files: Annotated[list[Path], typer.Argument(
+        help="A tactile HDF5 file, or one or more two-column CSV curves (header, then t in "
+             "s and the response), fitted together.",
         show_default=False)],
     kind: Annotated[Kind | None, typer.Option(
         help="Regions to fit (HDF5): press, slip or both; default both.",
@@ -129,13 +154,19 @@ def fit_fos_command(
         min=0.001, help="Bin width in ms (HDF5); default 20 for events, a count stream's "
                         "own width.", show_default=False)] = None,
     model: Annotated[CurveModel | None, typer.Option(
-        help="Model for a CSV curve: pulse (eq. 16), step or ramp (eq. 17).",
+        help="Model for CSV curves: pulse (eq. 16), step or ramp (eq. 17).",
+        show_default=False)] = None,
+    units: Annotated[str | None, typer.Option(
+        help="Unit of the CSV curves' response (and so of alpha); default: the unit in the "
+             "response column's header, as in 'force (N)', else 'units'.",
         show_default=False)] = None,
     press_duration: Annotated[float | None, typer.Option(
         min=1e-6, help="Known press length T in s for the pulse (default: fitted).",
         show_default=False)] = None,
     solver: Annotated[Solver, typer.Option(
-        help="Least-squares solver.")] = Solver.levenberg_marquardt,
+        help="Least-squares solver. Traced and compiled on first use and kept for later runs "
+             f"in {cache_root()} (set $TACTILE_CACHE_DIR to move it).")
+    ] = Solver.levenberg_marquardt,
     max_steps: Annotated[int, typer.Option(min=1, help="Solver step limit per fit.")] = 64,
     order: Annotated[bool, typer.Option(
         "--order/--no-order",
@@ -145,7 +176,8 @@ def fit_fos_command(
         "--csv", help="Also write the table to this CSV file.", show_default=False)] = None,
     plot: Annotated[Path | None, typer.Option(
         help="Folder for PNG figures of data and fitted curves (like the paper's Figs. "
-             "11-12).", show_default=False)] = None,
+             "11-12); a CSV curve's figure is named after its file.",
+        show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(
         help="Replace existing fit groups in the HDF5 file, and an existing --csv file.")] = False,
     no_write: Annotated[bool, typer.Option(
@@ -158,38 +190,52 @@ def fit_fos_command(
     solver's status and steps, and whether a second order fits better (BIC). An HDF5 file
     gets the results in /derived/fits/fos_press and fos_slip (validated copy, then
     renamed over the file). The slip's counts have the extrapolated press response
-    subtracted before eq. 17 is fitted. A CSV curve is fitted with --model. Compiled
-    solvers are cached in $TACTILE_CACHE_DIR/jax (default ~/.cache/tactile/jax), so only
-    the first run pays the compilation.
+    subtracted before eq. 17 is fitted. CSV curves are fitted with --model, all in one
+    batch, in the unit of their header or --units. The solver is traced and compiled once
+    and kept in $TACTILE_CACHE_DIR (default ~/.cache/tactile; --help of --solver shows
+    where), so later runs load it instead.
     """
 
     def body() -> None:
         from ..store.outdir import check_output_folder
         from ..store.trials import is_hdf5
 
-        if not file.is_file():
-            raise InputError("file not found", path=file)
+        for file in files:
+            if not file.is_file():
+                raise InputError("file not found", path=file)
         if plot is not None:  # figures are added to an existing folder; a file there is not
             check_output_folder(plot, merge=True)
         if csv_out is not None and csv_out.is_dir():
             raise InputError("is a folder; give a file name for --csv", path=csv_out)
         if csv_out is not None and csv_out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
-        is_h5 = is_hdf5(file)
-        if is_h5:
-            if model is not None:
-                raise InputError("--model applies to CSV curves; an HDF5 file's press regions "
-                                 "are fitted with the pulse (eq. 16), slips with the ramp "
-                                 "(eq. 17)", path=file)
+        hdf5 = [f for f in files if is_hdf5(f)]
+        if hdf5 and len(files) > 1:
+            raise InputError("fit-fos takes one HDF5 file per call; several inputs must all "
+                             "be CSV curves", path=hdf5[0])
+        if hdf5:
+            file = hdf5[0]
+            for flag, value in (("--model", model), ("--units", units)):
+                if value is not None:
+                    raise InputError(f"{flag} applies to CSV curves; an HDF5 file's press "
+                                     "regions are fitted with the pulse (eq. 16), slips with "
+                                     "the ramp (eq. 17), in events per bin", path=file)
             result = _fit_h5(file)
         else:
             for flag, value in (("--kind", kind), ("--regions", regions), ("--bin-ms", bin_ms)):
                 if value is not None:
                     raise InputError(f"{flag} applies to HDF5 files; a CSV is one curve "
-                                     "fitted with --model", path=file)
+                                     "fitted with --model", path=files[0])
             if model is None:
-                raise InputError("a CSV curve needs --model pulse, step or ramp", path=file)
-            result = _fit_csv(file)
+                raise InputError("a CSV curve needs --model pulse, step or ramp", path=files[0])
+            stems: dict[str, Path] = {}
+            for file in files:
+                if file.stem in stems:
+                    raise InputError(f"two inputs are named {file.stem!r} ({stems[file.stem]} "
+                                     "and this one); rows and figures are named after the "
+                                     "file, so rename one", path=file)
+                stems[file.stem] = file
+            result = _fit_csv(files)
         _report(result)
 
     def options() -> Any:
@@ -200,7 +246,7 @@ def fit_fos_command(
     def config() -> dict[str, Any]:
         return {"kind": (kind or Kind.both).value, "regions": (regions or Regions.auto).value,
                 "bin_ms": bin_ms, "press_duration_s": press_duration, "solver": solver.value,
-                "max_steps": max_steps, "order": order, "criterion": "bic"}
+                "max_steps": max_steps, "order": order, "criterion": "bic", "units": units}
 
     def _fit_h5(path: Path) -> dict[str, Any]:
         from ..fos.fit_file import fit_fos_file
@@ -214,23 +260,26 @@ def fit_fos_command(
                 bin_s=None if bin_ms is None else bin_ms / 1000,
                 press_duration_s=press_duration, order=order, options=options(),
                 write=not no_write, overwrite=overwrite, config=config())
-        return {"file": str(path), "input": "hdf5", "bin_s": result.bin_s,
+        return {"files": [str(path)], "input": "hdf5", "bin_s": result.bin_s,
                 "fits": result.fits, "labels": result.labels,
                 "records": {r: fit_records(result.fits[r], result.labels) for r in wanted},
                 "written": result.written}
 
-    def _fit_csv(path: Path) -> dict[str, Any]:
-        from ..fos.curve_csv import read_curve_csv
-        from ..fos.protocol import fit_curve
+    def _fit_csv(paths: list[Path]) -> dict[str, Any]:
+        from ..fos.curve_csv import read_curve
+        from ..fos.protocol import DEFAULT_UNITS, fit_curves
         from ..fos.table import fit_records
 
-        t_s, x = read_curve_csv(path)
+        curves = [read_curve(p) for p in paths]
         enable_compilation_cache()
         with _Status("fitting (the first run compiles the solver)"):
-            rf = fit_curve(t_s, x, model=model.value, name=path.stem,
-                           press_duration_s=press_duration, order=order, options=options())
-        return {"file": str(path), "input": "csv", "bin_s": None, "fits": {"curve": rf},
-                "labels": None, "records": {"curve": fit_records(rf)}, "written": {}}
+            rf = fit_curves([(c.t_s, c.x) for c in curves], model=model.value,
+                            names=[c.name for c in curves],
+                            units=[units or c.units or DEFAULT_UNITS for c in curves],
+                            press_duration_s=press_duration, order=order, options=options())
+        return {"files": [str(p) for p in paths], "input": "csv", "bin_s": None,
+                "fits": {"curve": rf}, "labels": None, "records": {"curve": fit_records(rf)},
+                "written": {}, "quantities": [c.quantity for c in curves]}
 
     def _report(result: dict[str, Any]) -> None:
         from ..fos.table import write_csv
@@ -238,20 +287,25 @@ def fit_fos_command(
         summaries = {r: _summary(recs) for r, recs in result["records"].items()}
         figures: list[str] = []
         if plot is not None:
-            from ..fos.plots import plot_region_fits
+            from ..fos.plots import plot_curve_fits, plot_region_fits
             from ..store.outdir import output_folder
 
             with output_folder(plot, merge=True) as tmp:  # in place when every page is
                 for region, rf in result["fits"].items():
-                    if region in result["records"]:
-                        figures += [str(plot / p.name) for p in plot_region_fits(
-                            rf, tmp, labels=result["labels"])]
+                    if region == "curve":
+                        pages = plot_curve_fits(rf, tmp, quantities=result["quantities"])
+                    elif region in result["records"]:
+                        pages = plot_region_fits(rf, tmp, labels=result["labels"])
+                    else:
+                        continue
+                    figures += [str(plot / p.name) for p in pages]
         if csv_out is not None:
             write_csv(csv_out, [rec for recs in result["records"].values() for rec in recs])
         if as_json:
+            paths = result["files"]
             out = {
-                "file": result["file"], "input": result["input"], "bin_s": result["bin_s"],
-                "config": config(),
+                "file": paths[0] if len(paths) == 1 else None, "files": paths,
+                "input": result["input"], "bin_s": result["bin_s"], "config": config(),
                 "regions": {
                     region: {"model": result["fits"][region].model,
                              "group": result["written"].get(region),

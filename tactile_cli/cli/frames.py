@@ -14,20 +14,21 @@ from ._errors import run_guarded
 
 def frames_command(
     file: Annotated[Path, typer.Argument(help="A tactile HDF5 file with events.",
-                                         show_default=False)],
+                                         metavar="FILE", show_default=False)],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (one subfolder per "
-                                      "trial).", show_default=False)],
+                                      "trial).", metavar="FOLDER",
+                                      show_default=False)],
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", "-t", help="Trial to draw; repeatable (default: every trial with events).",
-        show_default=False)] = None,
+        metavar="TRIAL", show_default=False)] = None,
     window_ms: Annotated[float, typer.Option(help="Accumulation window per frame, ms.")] = 50.0,
     median: Annotated[int, typer.Option(help="Median filter size in px against salt-and-"
                                         "pepper noise (odd; 1 = none).")] = 1,
     kind: Annotated[str, typer.Option(help="What a frame shows: polarity (ON green, OFF red), "
                                       "net, positive or negative.")] = "polarity",
     rois: Annotated[Path | None, typer.Option(help="ROI config (YAML or a scene.json) whose "
-                                              "rectangles are drawn on the contact sheet.")
-                    ] = None,
+                                              "rectangles are drawn on the contact sheet.",
+                                              metavar="FILE")] = None,
     start_s: Annotated[float, typer.Option(help="First window starts here, trial seconds.")
                        ] = 0.0,
     end_s: Annotated[float | None, typer.Option(help="Last window ends here (default: the "

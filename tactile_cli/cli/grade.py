@@ -37,19 +37,21 @@ def _fmt(v: float | None, spec: str = ".4f") -> str:
 def grade_command(
     files: Annotated[list[Path], typer.Argument(
         help="Tactile HDF5 files (events or an event-count stream with a `net` channel) or "
-             "CSV tables trial,area[,level].", show_default=False)],
+             "CSV tables trial,area[,level].", metavar="FILE", show_default=False)],
     config: Annotated[Path | None, typer.Option(
         "--config", "-c", help="Grader YAML config (default: the marker-sensor config "
-        "shipped with tactile, configs/grade_marker.yaml).", show_default=False)] = None,
+        "shipped with tactile, configs/grade_marker.yaml).", metavar="FILE",
+        show_default=False)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Write membership, inference and area-vs-level PNGs to this folder.",
-        show_default=False)] = None,
+        metavar="FOLDER", show_default=False)] = None,
     calibrate: Annotated[bool, typer.Option(
         "--calibrate", help="Fit the input membership functions to the labelled trials and "
         "write a new config to --out.")] = False,
     out: Annotated[Path | None, typer.Option(
-        "--out", "-o", help="Output config of --calibrate.", show_default=False)] = None,
+        "--out", "-o", help="Output config of --calibrate.", metavar="FILE",
+        show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --out file.")] = False,
     label_key: Annotated[str | None, typer.Option(
         "--label-key", help="Trial label holding the truth: force_grade or force_level "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -9,7 +10,7 @@ import typer
 
 from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
 from ..store.writer import Compression
-from ._errors import Flag, run_guarded
+from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
 from .progress import RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -21,24 +22,30 @@ FLAGS: dict[str, Flag] = {
     "height_px": "--height",
     "annotations": "--annotations",
     "trial_labels": "--trial-labels",
+    "frame_rate_hz": "--fps",
+    "skip_unknown": "--skip-unknown",
 }
 
 
 def ingest_command(
     inputs: Annotated[
-        list[Path], typer.Argument(help="Raw recordings: files or folders.", show_default=False)
+        list[Path], typer.Argument(help="Raw recordings: files or folders.", metavar="INPUT",
+                                   show_default=False)
     ],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", metavar="FILE",
+                                      show_default=False)],
     fmt: Annotated[
         str, typer.Option("--format", "-f", help=f"Input format: auto, {', '.join(FORMATS)}.")
     ] = "auto",
     mapping: Annotated[
         Path | None,
-        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml)."),
+        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml).",
+                     metavar="FILE"),
     ] = None,
     label: Annotated[
         list[str] | None,
-        typer.Option("--label", "-l", help="key=value label added to every trial; repeatable."),
+        typer.Option("--label", "-l", help="key=value label added to every trial; repeatable.",
+                     metavar="KEY=VALUE"),
     ] = None,
     width: Annotated[
         int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")
@@ -52,23 +59,34 @@ def ingest_command(
     fps: Annotated[
         float | None,
         typer.Option(
-            min=0.001, help="Frame rate of image folders without a timestamps.csv (default 30)."
+            min=0.001, metavar="HZ",
+            help="Frame rate of image folders without a timestamps.csv (default: 30 Hz assumed, "
+            "with a note).",
         ),
     ] = None,
     annotations: Annotated[
         Path | None,
         typer.Option(
             help="CSV of time intervals per trial (columns trial,start_s,end_s,label), "
-            "stored as /trials/<trial>/annotations.",
+            "stored as /trials/<trial>/annotations.", metavar="FILE",
         ),
     ] = None,
     trial_labels: Annotated[
         Path | None,
         typer.Option(
             help="CSV with a 'trial' column; every other column becomes a label of that "
-            "trial (numbers as numbers, empty cells skipped).",
+            "trial (numbers as numbers, empty cells skipped), except 'split' (train, val or "
+            "test), which sets the trial's split.", metavar="FILE",
         ),
     ] = None,
+    skip_unknown: Annotated[
+        bool,
+        typer.Option(
+            "--skip-unknown",
+            help="AEDAT4: leave out streams of a type tactile does not read (poses, bounding "
+            "boxes, ...), with a note; without it such a file is refused.",
+        ),
+    ] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     compression: Annotated[
         int,
@@ -87,12 +105,15 @@ def ingest_command(
 ) -> None:
     """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
 
-    Formats: AEDAT4 event files, event CSV (t,x,y,p) and NPY structured arrays, the
-    accelerometer CSV tree (object/orientation/speed folders), any sensor CSV described by
-    a YAML mapping file, and image-sequence folders of visuotactile sensors. Trials are
-    named after the input files (stems); --annotations and --trial-labels add ground truth
-    keyed by those names. The output is written to a temporary file and renamed into place
-    only when complete and valid.
+    Formats: AEDAT4 files (events, APS frames, IMU samples and triggers; --skip-unknown
+    leaves out other stream types), event CSV (t,x,y,p) and NPY structured arrays, the
+    accelerometer CSV tree (object/orientation/speed folders), any sensor CSV described by a
+    YAML mapping file (rows of a table as trials: `layout: rows`), and image-sequence
+    folders of visuotactile sensors (or a folder of such folders, one trial each). Trials
+    are named after the input files (stems) or folders; --annotations and --trial-labels add
+    ground truth keyed by those names. The output is written to a temporary file and renamed
+    into place only when complete and valid. Assumptions the file records (a frame rate for
+    folders without timestamps) are printed as notes on stderr.
     """
 
     def body() -> None:
@@ -106,6 +127,7 @@ def ingest_command(
             frame_rate_hz=fps,
             annotations=annotations,
             trial_labels=trial_labels,
+            skip_unknown=skip_unknown,
         )
         with RichProgress(enabled=progress) as bar:
             path = ingest(
@@ -115,7 +137,13 @@ def ingest_command(
                 overwrite=overwrite,
                 compression=Compression(None if compression < 0 else compression),
                 progress=bar,
+                on_note=_print_note,
             )
         typer.echo(f"wrote {path}")
 
     run_guarded(body, flags=FLAGS)
+
+
+def _print_note(note: str) -> None:
+    """A library note as one ``tactile: note:`` line on stderr, arguments spelt as flags."""
+    print(f"tactile: note: {to_flags(note, {**COMMON_FLAGS, **FLAGS})}", file=sys.stderr)

@@ -150,7 +150,8 @@ def perturb_command(
     data: Annotated[
         list[Path] | None,
         typer.Option("--data", "-d", help="Tactile HDF5 file(s) to evaluate on (perturbed in "
-                     "memory; the files are never changed).", show_default=False),
+                     "memory; the files are never changed).", metavar="FILE",
+                     show_default=False),
     ] = None,
     kinds: Annotated[
         str, typer.Option(help="Comma-separated: noise, lowpass, drop (events for event "
@@ -160,7 +161,7 @@ def perturb_command(
         list[str] | None,
         typer.Option("--levels", help="KIND=V1,V2,... (repeatable): noise SNR in dB, lowpass "
                      "cut-off as a fraction of Nyquist, drop fraction, scale time factor.",
-                     show_default=False),
+                     metavar="KIND=V1,V2", show_default=False),
     ] = None,
     threshold: Annotated[
         str, typer.Option(help="Accuracy below which a level is broken: a factor of the clean "
@@ -176,7 +177,7 @@ def perturb_command(
     out: Annotated[
         Path | None,
         typer.Option("--out", "-o", help="Folder for the combined chart of all runs "
-                     "(perturb.png, .csv, .json).", show_default=False),
+                     "(perturb.png, .csv, .json).", metavar="FOLDER", show_default=False),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print perturb.json to stdout.")
                        ] = False,

@@ -11,10 +11,12 @@ from ._errors import run_guarded
 
 
 def plot_command(
-    files: Annotated[list[Path], typer.Argument(help="Tactile HDF5 files.", show_default=False)],
+    files: Annotated[list[Path], typer.Argument(help="Tactile HDF5 files.", metavar="FILE",
+                                                show_default=False)],
     out: Annotated[
         Path,
-        typer.Option("--out", "-o", help="Folder for the PNGs and index.html.", show_default=False),
+        typer.Option("--out", "-o", help="Folder for the PNGs and index.html.", metavar="FOLDER",
+                     show_default=False),
     ],
     max_trials: Annotated[int, typer.Option(min=1, help="Trials drawn per file.")] = 4,
 ) -> None:

@@ -33,17 +33,19 @@ def report_command(
     out: Annotated[
         Path | None,
         typer.Option("--out", "-o", help="Folder for index.html and report.json.",
-                     show_default=False),
+                     show_default=False, metavar="FOLDER"),
     ] = None,
     data: Annotated[
         list[Path] | None,
         typer.Option("--data", "-d", help="Tactile HDF5 file(s) to summarise.",
-                     show_default=False),
+                     show_default=False, metavar="FILE"),
     ] = None,
     figures: Annotated[
         list[Path] | None,
         typer.Option("--figures", help="Folder whose PNG files (recursively) are added, "
-                     "captioned with their paths; repeatable.", show_default=False),
+                     "grouped by what they show and captioned in words (many of one kind: "
+                     "one grid with the count); repeatable.", show_default=False,
+                     metavar="FOLDER"),
     ] = None,
     title: Annotated[str | None, typer.Option(help="Page title.", show_default=False)] = None,
     margin: Annotated[
@@ -51,12 +53,17 @@ def report_command(
                             "comparison.")
     ] = 0.5,
     metric: Annotated[
-        str, typer.Option(help="Score of the comparison: accuracy, macro_f1 or f1:<class>.")
-    ] = "accuracy",
+        str, typer.Option(help="Score of the comparison: auto (per-trial accuracy where every "
+                          "run votes per trial, e.g. texture; else accuracy per window), "
+                          "accuracy, macro_f1, trial_accuracy or f1:<class>.")
+    ] = "auto",
 ) -> None:
-    """Write one self-contained HTML page (figures embedded) with the comparison, the
-    perturbation charts, every run's config, curves, metrics, confusion matrices and cost,
-    the data files' summaries and extra figures. Prints the path of index.html."""
+    """Write one self-contained HTML page (figures embedded): where every number comes
+    from (each result tagged recorded, simulated or synthetic, recorded data first), the
+    comparison, the perturbation charts, every run's config, curves, metrics (with
+    cross-validation folds, intervals and per-trial results when evaluated so), confusion
+    matrices and cost, the data files' summaries and the extra figures. Prints the path of
+    index.html."""
 
     def body() -> None:
         from ..learn.report import build_report

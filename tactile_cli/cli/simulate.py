@@ -43,7 +43,8 @@ def _parse_levels(text: str) -> list[int]:
 @app.command("marker-events")
 def marker_events_command(
     out: Annotated[
-        Path, typer.Option("--out", "-o", help="Output folder (created).", show_default=False)
+        Path, typer.Option("--out", "-o", help="Output folder (created).", show_default=False,
+                           metavar="FOLDER")
     ],
     config: Annotated[
         Path | None,
@@ -52,6 +53,7 @@ def marker_events_command(
             "-c",
             help="Scene config YAML (see configs/scene_marker_events.yaml); default: the "
             "built-in defaults, which that file repeats.",
+            metavar="CONFIG",
         ),
     ] = None,
     seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")] = 0,
@@ -78,7 +80,8 @@ def marker_events_command(
     """Simulate the paper's event-based marker sensor: approach, press, slip, release trials.
 
     Writes DIR/<trial>.npy (events: t in us from the trial start, x, y, p), DIR/trials.csv
-    (ground truth per trial), DIR/annotations.csv (the four action regions) and
+    (ground truth per trial, and its origin: columns origin=simulated and dataset),
+    DIR/annotations.csv (the four action regions) and
     DIR/scene.json (config, seed, sensor geometry, ROIs).
 
     Ingest: tactile ingest DIR/*.npy --width 640 --height 480 --annotations
@@ -110,5 +113,66 @@ def marker_events_command(
                       f"{summary['n_positive']:,}", f"{summary['n_negative']:,}",
                       f"{summary['duration_s']:.2f}", f"{summary['elapsed_s']:.2f}")
         Console(width=120).print(table)
+
+    run_guarded(body, flags=FLAGS)
+
+
+@app.command("vibro-slip")
+def vibro_slip_command(
+    out: Annotated[
+        Path, typer.Option("--out", "-o", help="Output folder: the CSV tree (created).",
+                           show_default=False, metavar="FOLDER")
+    ],
+    config: Annotated[
+        Path | None,
+        typer.Option("--config", "-c", help="Scene config YAML (see "
+                     "configs/scene_vibro_slip.yaml); default: the built-in defaults.",
+                     metavar="CONFIG"),
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")] = 0,
+    duration: Annotated[
+        float | None,
+        typer.Option("--duration", min=0.0, help="Override duration_s: seconds per recording "
+                     "(36 recordings by default)."),
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option(help="Replace an existing non-empty output folder.")
+    ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress",
+                     help="Show a progress bar (default: when stderr is a terminal).",
+                     show_default=False),
+    ] = None,
+) -> None:
+    """Simulate paper 001's slip-slide rig: accelerometer fingertips on 3 textures x 4
+    angles x 3 motor speeds, as the paper's CSV tree.
+
+    Writes DIR/<texture>/<angle>/<rps>/data.csv (L_x..R_z as a fraction of +-5 g, v_slip,
+    v_slide in m/s, 8 kHz) and DIR/scene.json (config, seed, ground truth per recording).
+
+    Ingest: tactile ingest DIR --format accel-tree --out scene.h5; then
+    tactile accel-prepare scene.h5 --out prepared.h5 for the training configs.
+    """
+
+    def body() -> None:
+        from ..accel import VibroSceneConfig, load_vibro_config, simulate_vibro_slip
+
+        cfg = load_vibro_config(config) if config is not None else VibroSceneConfig()
+        if duration is not None:
+            if not duration > 0:
+                raise InputError(f"--duration (={duration}) must be positive")
+            cfg = cfg.with_duration(duration)
+        with RichProgress(enabled=progress) as bar:
+            result = simulate_vibro_slip(cfg, out, seed=seed, progress=bar,
+                                         overwrite=overwrite)
+        summary = result.as_dict()
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+            return
+        typer.echo(f"vibro-slip -> {result.out_dir} (seed {result.seed}): "
+                   f"{summary['n_recordings']} recordings, {summary['duration_s']:.1f} s in "
+                   f"all, simulated in {summary['elapsed_s']:.1f} s")
 
     run_guarded(body, flags=FLAGS)

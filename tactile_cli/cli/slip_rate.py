@@ -25,19 +25,19 @@ def _fmt(value: float | None, scale: float = 1.0, digits: int = 4) -> str:
 
 def slip_rate_command(
     file: Annotated[Path, typer.Argument(help="A tactile HDF5 file with events and slip "
-                                         "annotations.", show_default=False)],
+                                         "annotations.", metavar="FILE", show_default=False)],
     rois: Annotated[Path | None, typer.Option(
         help="ROI + optics config: YAML (configs/rois_marker_scene.yaml) or a scene's "
              "scene.json. Without it the ROIs are proposed from each trial's slip-region "
              "events and the optics come from the sensor's attributes.",
-        show_default=False)] = None,
+        metavar="FILE", show_default=False)] = None,
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", "-t", help="Trial to measure; repeatable (default: every trial with "
-        "events).", show_default=False)] = None,
+        "events).", metavar="TRIAL", show_default=False)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON.")] = False,
     plot: Annotated[Path | None, typer.Option(
         help="Folder for one Fig. 23-style PNG per trial (centroid, velocity, displacement) "
-             "and slip_rate.json.", show_default=False)] = None,
+             "and slip_rate.json.", metavar="FOLDER", show_default=False)] = None,
 ) -> None:
     """Slip speed (m/s) and displacement (m) per trial from the event-weighted centroids of
     the marker-strip ROIs (paper 000, eqs. 19-21, Fig. 23): the slope of a line fitted to the

@@ -19,23 +19,24 @@ FLAGS: dict[str, Flag] = {
 
 
 def synth_command(
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.",
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", metavar="FILE",
                                       show_default=False)],
     fits: Annotated[Path | None, typer.Option(
         help="Tactile file with /derived/fits/fos_press and fos_slip (from `tactile fit-fos`): "
              "parameters are drawn per force level from its converged fits. Without it, from "
-             "the config's fos section (the paper's values).", show_default=False)] = None,
+             "the config's fos section (the paper's values).", metavar="FILE",
+        show_default=False)] = None,
     centroids: Annotated[Path | None, typer.Option(
         help="ROI config (configs/rois_marker_scene.yaml or a scene's scene.json): also write "
              "each trial's model-based ROI centroid trajectories as the stream roi_centroids "
              "(the config's centroids section; paper 000, sec. 5.2).",
-        show_default=False)] = None,
+        metavar="FILE", show_default=False)] = None,
     n: Annotated[int, typer.Option("--n", min=1, help="Number of trials.")] = 500,
     seed: Annotated[int, typer.Option(min=0, help="Random seed (same seed, same trials).")] = 0,
     config: Annotated[Path | None, typer.Option(
         "--config", "-c", help="Synth config YAML (see configs/synth_fos.yaml); default: the "
                                "built-in defaults, which that file repeats.",
-        show_default=False)] = None,
+        metavar="FILE", show_default=False)] = None,
     bin_ms: Annotated[float | None, typer.Option(
         min=0.001, help="Bin width in ms; overrides the config's bin_s.",
         show_default=False)] = None,

@@ -13,7 +13,8 @@ from ._errors import EXIT_BAD_INPUT
 
 
 def validate_command(
-    files: Annotated[list[Path], typer.Argument(help="HDF5 files to check.", show_default=False)],
+    files: Annotated[list[Path], typer.Argument(help="HDF5 files to check.", metavar="FILE",
+                                                show_default=False)],
     as_json: Annotated[bool, typer.Option("--json", help="Print the reports as JSON.")] = False,
 ) -> None:
     """Check files against the tactile schema. Exit 0 when all are valid, 1 when any is not,

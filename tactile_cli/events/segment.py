@@ -61,7 +61,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from ..vocabulary import ACTIONS, BIN_S
 from .accumulate import moving_average
@@ -373,6 +372,8 @@ class _Trial:
         # noise of the smoothed curve at each bin: Poisson variance grows with the count
         noise_s = np.sqrt(self.noise_std**2 + np.abs(s - self.baseline)) / np.sqrt(o.smooth_bins)
         span = float(self.s.max() - self.s.min())
+        from scipy.signal import find_peaks  # here: importing scipy.signal takes ~1 s
+
         found, props = find_peaks(s, prominence=o.min_prominence_fraction * span)
         keep = props["prominences"] > o.k_sigma * noise_s[found]
         found = found[keep] + start

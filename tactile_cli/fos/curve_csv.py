@@ -2,8 +2,10 @@
 
 Format: a header line (e.g. ``t,x``), then one ``t, x`` row per sample: ``t`` in seconds
 from the input's start (>= 0, strictly increasing), ``x`` the response (any unit; a fitted
-alpha is in the same unit). Blank lines are skipped; any other bad row is an
-:class:`~tactile_cli.errors.InputError` naming the file and the line.
+alpha is in the same unit). A column name may carry its unit in parentheses or brackets,
+``t (s),force (N)`` or ``t [s],force [N]``: the response's unit then labels the fits and
+figures (the time column's must be seconds). Blank lines are skipped; any other bad row is
+an :class:`~tactile_cli.errors.InputError` naming the file and the line.
 """
 
 from __future__ import annotations
@@ -11,6 +13,8 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -27,8 +31,51 @@ def _number(text: str) -> float | None:
     return value if math.isfinite(value) else None
 
 
+#: ``name (unit)`` or ``name [unit]``.
+_NAME_UNIT = re.compile(r"^(?P<name>.*?)\s*[(\[]\s*(?P<unit>[^()\[\]]*?)\s*[)\]]$")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One response curve: ``t_s`` (n,) float64 seconds, ``x`` (n,) float64 responses;
+    ``name`` the file's stem, ``quantity`` the response column's name (without its unit),
+    ``units`` the unit its header gives, or None."""
+
+    name: str
+    t_s: np.ndarray
+    x: np.ndarray
+    quantity: str
+    units: str | None
+
+
+def split_unit(column: str) -> tuple[str, str | None]:
+    """``"force (N)"`` -> ``("force", "N")``; a name without a unit -> ``(name, None)``."""
+    match = _NAME_UNIT.match(column)
+    if match is None or not match["unit"]:
+        return column, None
+    return match["name"] or column, match["unit"]
+
+
+def read_curve(path: str | Path) -> Curve:
+    """The :class:`Curve` of a two-column CSV file (see the module doc)."""
+    path = Path(path)
+    t_s, x, header, line = _read(path)
+    _, t_unit = split_unit(header[0])
+    if t_unit is not None and t_unit != "s":
+        raise InputError(f"the time column {header[0]!r} is in {t_unit!r}; give t in seconds "
+                         "('t (s)' or plain 't')", path=path, where=f"line {line}")
+    quantity, units = split_unit(header[1])
+    return Curve(name=path.stem, t_s=t_s, x=x, quantity=quantity, units=units)
+
+
 def read_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """``(t_s, x)``: (n,) float64 times in seconds and (n,) float64 responses."""
+    curve = read_curve(path)
+    return curve.t_s, curve.x
+
+
+def _read(path: Path) -> tuple[np.ndarray, np.ndarray, list[str], int]:
+    """Times, responses, the header's two names and its line number."""
     path = Path(path)
     t_s: list[float] = []
     x: list[float] = []
@@ -42,7 +89,8 @@ def read_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if not rows:
         raise InputError("the file is empty; expected a header (t,x) and rows of t, x",
                          path=path)
-    line, header = rows[0]
+    header_line, header = rows[0]
+    line = header_line
     if len(header) != 2 or all(_number(c) is not None for c in header):
         raise InputError(f"expected a header of two column names such as 't,x', got "
                          f"{','.join(header)!r}", path=path, where=f"line {line}")
@@ -65,7 +113,7 @@ def read_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         x.append(v)
     if len(t_s) < 5:
         raise InputError(f"{len(t_s)} data rows; a fit needs at least 5", path=path)
-    return np.array(t_s), np.array(x)
+    return np.array(t_s), np.array(x), header, header_line
 
 
-__all__ = ["read_curve_csv"]
+__all__ = ["Curve", "read_curve", "read_curve_csv", "split_unit"]

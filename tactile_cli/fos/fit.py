@@ -2,10 +2,15 @@
 and of their second-order alternative.
 
 Every trial of a file is fitted at once: the trials are padded to ``(n_trials, n_points)``
-with a boolean mask for ragged lengths, cut into chunks of ``chunk_size`` trials, and each
-chunk runs one jit-compiled, vmapped Levenberg-Marquardt (or Gauss-Newton) solve of
-optimistix in float64. A vmapped solver loop runs every trial of a chunk for as many steps
-as its slowest one, so the work is arranged for few and uniform step counts:
+with a boolean mask for ragged lengths, then to whole chunks of ``chunk_size`` (64) trials
+and to a bucketed number of points (32, 48, 64, 96, 128, ...), and each chunk runs the one
+compiled solver of :mod:`tactile_cli.fos.solver`: a vmapped optimistix Levenberg-Marquardt
+(or Gauss-Newton) solve in float64. Every model (pulse, step, ramp; first or second order;
+T known or fitted) runs through that same program, its model a run-time input, so one
+compilation serves every fit of a file and every file of similar length, and
+:mod:`tactile_cli.fos.compile_cache` keeps it for later processes. A vmapped solver loop runs
+every trial of a chunk for as many steps as its slowest one, so the work is arranged for few
+and uniform step counts:
 
 - Variable projection: the models are linear in the gain ``alpha`` (and, for the second
   order, in ``alpha * lead``), so for given time constants the gains are solved in closed
@@ -15,38 +20,38 @@ as its slowest one, so the work is arranged for few and uniform step counts:
   pulse, the 37 % decay time after T (which does not need the plateau reached); ``T`` from
   where the fall crosses 37 %, minus ``tau``; the ramp's ``tau`` from the time-axis
   crossing of its asymptote.
-- Residuals are scaled by the data's RMS so that the tolerances are scale free, and the
-  residual carries a hand-set JVP so that the solver's loop state stays small.
+- Residuals are scaled by the data's RMS so that the tolerances are scale free.
 
-Standard errors come from the Jacobian of the model in its natural parameters (alpha,
-[lead in s,] tau in s, [zeta,] [T in s]) at the solution: ``s^2 (J^T J)^-1`` with
-``s^2 = RSS / (n - p)``. A fit is ``converged`` only when the solver says so *and* the
-solution passes checks that the solver's stopping rule does not make: finite values and
-standard errors, time constants inside their bounds, identifiable parameters, a
-Gauss-Newton step from the solution below a tenth of a standard error (a minimum, not a
-stall) and a residual no larger than at the data-driven start. Anything else is a
-per-trial :class:`FitStatus`; one bad trial never raises for the batch, and by default a
-trial that did not converge has NaN parameters.
+Everything around the solve is numpy here, not compiled: inputs, starts, the polish of a
+fitted T, and the assessment. Standard errors come from the Jacobian of the model in its
+natural parameters (alpha, [lead in s,] tau in s, [zeta,] [T in s]) at the solution:
+``s^2 (J^T J)^-1`` with ``s^2 = RSS / (n - p)``. A fit is ``converged`` only when the solver
+says so *and* the solution passes checks that the solver's stopping rule does not make:
+finite values and standard errors, time constants inside their bounds, identifiable
+parameters, a Gauss-Newton step from the solution below a tenth of a standard error (a
+minimum, not a stall) and a residual no larger than at the data-driven start. Anything else
+is a per-trial :class:`FitStatus` (a ramp that stalls on flattening counts is
+``saturated``); one bad trial never raises for the batch, and by default a trial that did
+not converge has NaN parameters.
 
-float64: the fits run inside ``jax.enable_x64(True)``, a context manager, so importing or
+float64: the solves run inside ``jax.enable_x64(True)``, a context manager, so importing or
 calling this module changes no global JAX setting; results are numpy float64 arrays.
 """
 
 from __future__ import annotations
 
 import enum
-import functools
 import math
 from dataclasses import dataclass, fields, replace
 from typing import Any, Literal
 
 import jax
-import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 from numpy.typing import ArrayLike
 
+from . import solver
 from .models import KINDS, Kind, second_order_basis, unit_response
+from .solver import SolverSpec, first_order_terms, gains, unpack
 
 
 class FitStatus(enum.StrEnum):
@@ -54,6 +59,7 @@ class FitStatus(enum.StrEnum):
 
     CONVERGED = "converged"
     MAX_STEPS = "max_steps"
+    SATURATED = "saturated"
     NONFINITE = "nonfinite"
     SOLVER_ERROR = "solver_error"
     OUT_OF_RANGE = "out_of_range"
@@ -69,6 +75,9 @@ class FitStatus(enum.StrEnum):
 _MESSAGES = {
     FitStatus.CONVERGED: "the solver converged to a minimum inside the bounds",
     FitStatus.MAX_STEPS: "the solver ran out of steps; raise `max_steps` or check the start",
+    FitStatus.SATURATED: "the counts flatten towards the end of the region: the response is "
+                         "saturated, not first-order, so no ramp (eq. 17) fits it and more "
+                         "solver steps would not help (the solver ran out of steps)",
     FitStatus.NONFINITE: "NaN or inf in the solution",
     FitStatus.SOLVER_ERROR: "the solver stopped with an error (divergence or linear solve)",
     FitStatus.OUT_OF_RANGE: "a time constant or the duration ran outside its bounds "
@@ -82,8 +91,6 @@ _MESSAGES = {
 }
 _STATUS_BY_CODE = tuple(FitStatus)
 _CODE = {s: i for i, s in enumerate(_STATUS_BY_CODE)}
-#: Pad n_points to a multiple of this, so files of similar length share one compilation.
-_POINT_BUCKET = 32
 #: A fit is at a minimum when a Gauss-Newton step from it is below this many SEs.
 _STATIONARY_SE = 0.1
 #: Largest variance inflation (diagonal of the inverse of the column-scaled J^T J) of
@@ -93,7 +100,7 @@ _MAX_INFLATION = 1e8
 
 @dataclass(frozen=True)
 class _Config:
-    """Static part of a batched fit: one compiled solver per distinct config and shape."""
+    """One batched fit: the model, and the solver settings (:attr:`static`)."""
 
     kind: str
     order: int  # 1: first-order system; 2: the second-order alternative
@@ -112,6 +119,11 @@ class _Config:
     def n_params(self) -> int:
         """All fitted parameters: the gains (alpha [, alpha * lead]) and the iterated ones."""
         return 2 * self.order + int(self.fit_duration)
+
+    @property
+    def static(self) -> SolverSpec:
+        """The compiled program's specialisation (the model is a run-time input of it)."""
+        return SolverSpec(self.solver, self.rtol, self.atol, self.max_steps)
 
 
 #: Result fields that are only meaningful for a converged fit.
@@ -195,260 +207,279 @@ def _plain(v: Any) -> Any:
     return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
-# --------------------------------------------------------------------------- jax core
-def _unpack(cfg: _Config, theta: jax.Array, duration: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Solver coordinates -> (tau [, zeta] in natural units, T).
-
-    Order 1 iterates log(tau). Order 2 iterates log(2 zeta tau) and log(tau^2), the
-    coefficients of the denominator ``tau^2 s^2 + 2 zeta tau s + 1`` (the sum and the
-    product of the time constants when the poles are real).
-    """
-    if cfg.order == 1:
-        shape = jnp.exp(theta[:1])
-    else:
-        tau = jnp.exp(0.5 * theta[1])
-        shape = jnp.stack([tau, jnp.exp(theta[0]) / (2.0 * tau)])
-    return shape, (jnp.exp(theta[cfg.order]) if cfg.fit_duration else duration)
+# --------------------------------------------------------------------------- numpy core
+#: Largest variance inflation, and the Gauss-Newton step threshold, are above; these are
+#: the relative steps of the finite differences of the model (central for the standard
+#: errors, forward for the polish of a fitted T).
+_FD_REL = 1e-5
+_FD_POLISH = 1e-7
 
 
-def _basis(cfg: _Config, t: jax.Array, shape: jax.Array, duration: jax.Array) -> jax.Array:
-    """(n_points, order) responses the gains multiply; a step has no duration (T -> inf)."""
-    dur = duration if cfg.kind == "pulse" else None
-    if cfg.order == 1:
-        return unit_response(cfg.kind, t, shape[0], dur)[:, None]
-    return jnp.stack(second_order_basis(cfg.kind, t, shape[0], shape[1], dur), axis=1)
+def _bucket(n: int) -> int:
+    """Padded length for ``n`` points: the next of 32, 48, 64, 96, 128, 192, ... (a power of
+    two or 1.5 times one), so that regions of similar length share one compilation and
+    padding costs at most half the work."""
+    size = 32
+    while size < n:
+        size = size * 3 // 2 if size & (size - 1) == 0 else size * 4 // 3
+    return size
 
 
-def _gains(basis: jax.Array, y: jax.Array, m: jax.Array) -> jax.Array:
-    """Closed-form least-squares gains for a given basis (the variable projection).
-
-    Written out for one and two columns: a LAPACK solve inside the solver loop would cost
-    more compile time than the whole 2 x 2 algebra.
-    """
-    bm = basis * m[:, None]
-    gram, rhs = bm.T @ bm, bm.T @ y
-    if basis.shape[1] == 1:
-        return rhs / gram[0]
-    # The ridge only matters where the columns are parallel (the gram is singular).
-    a, b, d = gram[0, 0], gram[0, 1], gram[1, 1]
-    ridge = 1e-12 * (a + d)
-    a, d = a + ridge, d + ridge
-    return jnp.stack([d * rhs[0] - b * rhs[1], a * rhs[1] - b * rhs[0]]) / (a * d - b * b)
+def _second_basis(cfg: _Config, t: np.ndarray, tau: np.ndarray, zeta: np.ndarray,
+                  dur: np.ndarray) -> np.ndarray:
+    """(n, n_points, 2) second-order basis at per-trial (n,) parameters (numpy)."""
+    col = (slice(None), None)
+    with np.errstate(all="ignore"):
+        return np.stack(second_order_basis(cfg.kind, t, tau[col], zeta[col],
+                                           dur[col] if cfg.kind == "pulse" else None), axis=-1)
 
 
-def _residual(cfg: _Config, theta: jax.Array, args: tuple) -> jax.Array:
-    t, y, m, duration, scale = args
-    basis = _basis(cfg, t, *_unpack(cfg, theta, duration))
-    return (y - basis @ _gains(basis, y, m)) * m * scale
+def _model(cfg: _Config, theta: np.ndarray, t: np.ndarray, y: np.ndarray, m: np.ndarray,
+           duration: np.ndarray, *, jacobian: bool = False) -> dict[str, np.ndarray]:
+    """The projected model at ``theta`` (n, 3), numpy: ``tau``, ``zeta``, ``duration``,
+    gains ``alpha`` and ``lead`` (n,), masked residual ``resid`` (n, p); with ``jacobian``
+    also ``columns``, the Jacobian of ``alpha (b0 + lead b1)`` in each natural parameter
+    (n, p), masked. First-order derivatives are exact; second-order ones central
+    differences."""
+    tau, zeta, dur = unpack(theta, duration, cfg.order == 2, cfg.fit_duration, xp=np)
+    col = (slice(None), None)
+    out = {"tau": tau, "zeta": zeta, "duration": dur}
+    with np.errstate(all="ignore"):
+        if cfg.order == 1:
+            b, b_tau, b_dur = first_order_terms(t, tau, dur, cfg.kind == "ramp", xp=np)
+            alpha = np.sum(m * b * y, axis=1) / np.sum(m * b * b, axis=1)
+            out.update(alpha=alpha, lead=np.zeros_like(alpha), resid=(y - alpha[col] * b) * m)
+            if jacobian:
+                out["columns"] = {"alpha": b * m, "tau": alpha[col] * b_tau * m,
+                                  "duration": alpha[col] * b_dur * m}
+            return out
+        b = _second_basis(cfg, t, tau, zeta, dur)
+        g = gains(b, y, m, xp=np)
+        alpha, lead = g[:, 0], g[:, 1] / g[:, 0]
+        out.update(alpha=alpha, lead=lead,
+                   resid=(y - b[..., 0] * g[:, :1] - b[..., 1] * g[:, 1:]) * m)
+        if jacobian:
+            columns = {"alpha": (b[..., 0] + lead[col] * b[..., 1]) * m,
+                       "lead": alpha[col] * b[..., 1] * m}
+            for name in ("tau", "zeta", "duration"):
+                h = _FD_REL * out[name]
+                up, down = dict(out), dict(out)
+                up[name], down[name] = out[name] + h, out[name] - h
+                db = (_second_basis(cfg, t, up["tau"], up["zeta"], up["duration"])
+                      - _second_basis(cfg, t, down["tau"], down["zeta"], down["duration"])
+                      ) / (2 * h)[:, None, None]
+                columns[name] = alpha[col] * (db[..., 0] + lead[col] * db[..., 1]) * m
+            out["columns"] = columns
+    return out
 
 
-@functools.cache
-def _solver_residual(cfg: _Config) -> Any:
-    """The residual with a hand-set JVP, ``J @ dtheta`` with J (n_points, n_nonlinear).
-
-    Plain autodiff would make the linearisation keep every (n_points,) intermediate of the
-    model, and a vmapped while loop copies (selects) its whole carry on every step; with
-    this rule the carry holds just J, which made a 1024-trial chunk about 3x faster per step
-    and quicker to compile.
-    """
-    base = functools.partial(_residual, cfg)
-
-    @jax.custom_jvp
-    def residual(theta: jax.Array, args: tuple) -> jax.Array:
-        return base(theta, args)
-
-    @residual.defjvp
-    def _jvp(primals: tuple, tangents: tuple) -> tuple[jax.Array, jax.Array]:
-        theta, args = primals
-        return base(theta, args), jax.jacfwd(base)(theta, args) @ tangents[0]
-
-    return residual
+def _cost(cfg: _Config, theta: np.ndarray, *args: np.ndarray) -> np.ndarray:
+    """(n,) residual sum of squares of the projected model at ``theta``."""
+    return np.sum(_model(cfg, theta, *args)["resid"] ** 2, axis=1)
 
 
-def _moving_sum(x: jax.Array, half: int = 2) -> jax.Array:
-    """Sum over a centred window of 2 half + 1 points (shifted adds compile faster than a
-    convolution)."""
-    padded = jnp.pad(x, half)
-    return sum(padded[k: k + x.shape[0]] for k in range(2 * half + 1))
+def _moving_sum(x: np.ndarray, half: int = 2) -> np.ndarray:
+    """Sum over a centred window of 2 half + 1 points along the last axis."""
+    padded = np.pad(x, ((0, 0), (half, half)))
+    return sum(padded[:, k: k + x.shape[1]] for k in range(2 * half + 1))
 
 
-def _first_index(cond: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Index of the first True, and whether there is one."""
-    return jnp.argmax(cond), jnp.any(cond)
-
-
-def _start(cfg: _Config, t: jax.Array, y: jax.Array, m: jax.Array, duration: jax.Array,
-           bounds: jax.Array) -> jax.Array:
-    """Data-driven start in solver coordinates for one trial."""
+def _starts(cfg: _Config, t: np.ndarray, y: np.ndarray, m: np.ndarray, duration: np.ndarray,
+            bounds: np.ndarray) -> np.ndarray:
+    """(n, 3) data-driven starts in solver coordinates (see :func:`~.solver.unpack`)."""
+    rows = np.arange(len(t))
     valid = m > 0
-    smooth = _moving_sum(y * m) / jnp.maximum(_moving_sum(m), 1.0)  # 5-bin masked mean
-    t_last = jnp.max(jnp.where(valid, t, -jnp.inf))
-    dur = duration
-    if cfg.kind == "ramp":
-        # For t >> tau the ramp response is alpha (t - tau) / tau: its asymptote crosses the
-        # time axis at t = tau. Fit a line to the second half of the region.
-        w = m * (t >= 0.5 * t_last)
-        sw = jnp.maximum(jnp.sum(w), 1.0)
-        tm, ym = jnp.sum(w * t) / sw, jnp.sum(w * smooth) / sw
-        slope = jnp.sum(w * (t - tm) * (smooth - ym)) / jnp.sum(w * (t - tm) ** 2)
-        tau = tm - ym / slope
-        tau = jnp.where(jnp.isfinite(tau) & (tau > 0), tau, 0.25 * t_last)
-    else:
-        peak_i = jnp.argmax(jnp.where(valid, smooth, -jnp.inf))
-        peak = smooth[peak_i]
-        i_rise, has_rise = _first_index(valid & (smooth >= (1 - np.exp(-1)) * peak))
-        t_rise = jnp.where(has_rise, t[i_rise], 0.25 * t_last)  # 63 % rise time
-        # After T a pulse decays as exp(-(t - T)/tau) from wherever it got to, so the 37 %
-        # decay time does not need the plateau reached: use it when the data show it.
-        i_fall, has_fall = _first_index(valid & (t > t[peak_i]) & (smooth <= np.exp(-1) * peak))
-        t_fall = t[i_fall]
-        if cfg.kind == "step":
-            tau = t_rise
-        elif cfg.fit_duration:  # the fall reaches 37 % one tau after T
-            tau = t_rise
-            dur = jnp.where(has_fall, t_fall - t_rise, t[peak_i])
+    with np.errstate(all="ignore"):
+        smooth = _moving_sum(y * m) / np.maximum(_moving_sum(m), 1.0)  # 5-bin masked mean
+        t_last = np.max(np.where(valid, t, -np.inf), axis=1)
+        dur = np.full(len(t), np.nan)
+        if cfg.kind == "ramp":
+            # For t >> tau the ramp response is alpha (t - tau) / tau: its asymptote crosses
+            # the time axis at t = tau. Fit a line to the second half of the region.
+            w = m * (t >= 0.5 * t_last[:, None])
+            sw = np.maximum(w.sum(axis=1), 1.0)[:, None]
+            tm, ym = (w * t).sum(axis=1)[:, None] / sw, (w * smooth).sum(axis=1)[:, None] / sw
+            slope = ((w * (t - tm) * (smooth - ym)).sum(axis=1)
+                     / (w * (t - tm) ** 2).sum(axis=1))
+            tau = tm[:, 0] - ym[:, 0] / slope
+            tau = np.where(np.isfinite(tau) & (tau > 0), tau, 0.25 * t_last)
         else:
-            tau = jnp.where(has_fall & (t_fall > dur), t_fall - dur, t_rise)
-    tau = jnp.clip(tau, 2.0 * bounds[0], 0.5 * bounds[1])
-    # Order 2 starts with real poles at tau and tau/4, so that the closed-form gains can
-    # cancel the fast one with the zero: the start is then at least as good as the FOS.
-    shape = ([jnp.log(tau)] if cfg.order == 1
-             else [jnp.log(1.25 * tau), 2.0 * jnp.log(0.5 * tau)])
-    if cfg.fit_duration:
-        shape.append(jnp.log(jnp.clip(dur, bounds[2], bounds[3])))
-    return jnp.stack(shape)
+            peak_i = np.argmax(np.where(valid, smooth, -np.inf), axis=1)
+            peak = smooth[rows, peak_i][:, None]
+            rise = valid & (smooth >= (1 - np.exp(-1)) * peak)
+            t_rise = np.where(rise.any(axis=1), t[rows, np.argmax(rise, axis=1)], 0.25 * t_last)
+            # After T a pulse decays as exp(-(t - T)/tau) from wherever it got to, so the 37 %
+            # decay time does not need the plateau reached: use it when the data show it.
+            fall = valid & (t > t[rows, peak_i][:, None]) & (smooth <= np.exp(-1) * peak)
+            has_fall, t_fall = fall.any(axis=1), t[rows, np.argmax(fall, axis=1)]
+            if cfg.kind == "step":
+                tau = t_rise
+            elif cfg.fit_duration:  # the fall reaches 37 % one tau after T
+                tau = t_rise
+                dur = np.where(has_fall, t_fall - t_rise, t[rows, peak_i])
+            else:
+                tau = np.where(has_fall & (t_fall > duration), t_fall - duration, t_rise)
+        tau = np.clip(tau, 2.0 * bounds[:, 0], 0.5 * bounds[:, 1])
+        theta = np.zeros((len(t), 3))
+        # Order 2 starts with real poles at tau and tau/4, so that the closed-form gains can
+        # cancel the fast one with the zero: the start is then at least as good as the FOS.
+        if cfg.order == 2:
+            theta[:, 0], theta[:, 1] = np.log(1.25 * tau), 2.0 * np.log(0.5 * tau)
+        else:
+            theta[:, 0] = np.log(tau)
+        if cfg.fit_duration:
+            theta[:, 2] = np.log(np.clip(dur, bounds[:, 2], bounds[:, 3]))
+    return theta
 
 
-def _polish_shape(cfg: _Config, theta: jax.Array, args: tuple, n_iter: int = 3) -> jax.Array:
+def _small_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Batched ``a^-1 b`` for symmetric positive definite (n, k, k) ``a`` and (n, k) ``b``
+    through the eigendecomposition: inf or NaN where ``a`` is singular, never an error."""
+    ok = np.all(np.isfinite(a), axis=(1, 2))
+    w, v = np.linalg.eigh(np.where(ok[:, None, None], a, np.eye(a.shape[1])))
+    with np.errstate(all="ignore"):
+        inv_w = np.where(w > 0, 1.0 / w, np.inf)
+        x = np.einsum("nij,nj,nkj,nk->ni", v, inv_w, v, b)
+    return np.where(ok[:, None], x, np.nan)
+
+
+def _small_inverse(a: np.ndarray) -> np.ndarray:
+    """Batched inverse of symmetric positive definite (n, k, k) ``a`` (inf/NaN if singular)."""
+    ok = np.all(np.isfinite(a), axis=(1, 2))
+    w, v = np.linalg.eigh(np.where(ok[:, None, None], a, np.eye(a.shape[1])))
+    with np.errstate(all="ignore"):
+        inv = np.einsum("nij,nj,nkj->nik", v, np.where(w > 0, 1.0 / w, np.inf), v)
+    return np.where(ok[:, None, None], inv, np.nan)
+
+
+def _polish(cfg: _Config, theta: np.ndarray, t: np.ndarray, y: np.ndarray, m: np.ndarray,
+            duration: np.ndarray, n_iter: int = 3) -> np.ndarray:
     """A few Gauss-Newton steps in the shape coordinates with T held where the solver left it.
 
     The pulse model has a kink in T at every sample time. Where the fitted T sits on one,
     Levenberg-Marquardt's trust region collapses for all coordinates at once and can stop
-    with tau short of its optimum for that T; these steps finish tau (kept only if they
-    lower the residual).
+    with tau short of its optimum for that T; these steps finish tau, and are kept only
+    where they lower the residual. (Forward differences of the projected residual.)
     """
-    n_shape = cfg.n_nonlinear - 1
-    fixed = replace(cfg, fit_duration=False)
-
-    def resid(shape_coords: jax.Array) -> jax.Array:
-        t, y, m, _, scale = args
-        return _residual(fixed, shape_coords, (t, y, m, jnp.exp(theta[n_shape]), scale))
-
-    coords = theta[:n_shape]
-    for _ in range(n_iter):
-        r, jac = resid(coords), jax.jacfwd(resid)(coords)
-        coords = coords - _solve_small(jac.T @ jac, jac.T @ r)
-    better = jnp.sum(resid(coords) ** 2) < jnp.sum(resid(theta[:n_shape]) ** 2)
-    polished = jnp.concatenate([coords, theta[n_shape:]])
-    return jnp.where(better & jnp.all(jnp.isfinite(coords)), polished, theta)
-
-
-def _solve_small(a: jax.Array, b: jax.Array) -> jax.Array:
-    """``a^-1 b`` for 1 x 1 and 2 x 2 ``a``, written out (no LAPACK call to compile)."""
-    if a.shape[0] == 1:
-        return b / a[0, 0]
-    det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    return jnp.stack([a[1, 1] * b[0] - a[0, 1] * b[1], a[0, 0] * b[1] - a[1, 0] * b[0]]) / det
+    k = cfg.order  # shape coordinates
+    args = (t, y, m, duration)
+    shape = theta.copy()
+    with np.errstate(all="ignore"):
+        for _ in range(n_iter):
+            r = _model(cfg, shape, *args)["resid"]
+            jac = []
+            for j in range(k):
+                moved = shape.copy()
+                moved[:, j] += _FD_POLISH
+                jac.append((_model(cfg, moved, *args)["resid"] - r) / _FD_POLISH)
+            gram = np.array([[np.sum(a * b, axis=1) for b in jac] for a in jac]).transpose(2, 0, 1)
+            rhs = np.stack([np.sum(a * r, axis=1) for a in jac], axis=1)
+            shape[:, :k] -= _small_solve(gram, rhs)
+        better = _cost(cfg, shape, *args) < _cost(cfg, theta, *args)
+    better &= np.all(np.isfinite(shape), axis=1)
+    return np.where(better[:, None], shape, theta)
 
 
-def _in_bounds(cfg: _Config, shape: jax.Array, lead: jax.Array, dur: jax.Array,
-               bounds: jax.Array) -> jax.Array:
-    lo, hi = bounds[0], bounds[1]
-    if cfg.order == 1:
-        ok = (shape[0] >= lo) & (shape[0] <= hi)
-    else:  # fast time constant ~tau/(2 zeta), sum 2 zeta tau, envelope decay tau/zeta, zero
-        tau, zeta = shape[0], shape[1]
-        ok = ((tau / (2 * zeta) >= lo) & (2 * zeta * tau <= hi) & (tau / zeta <= hi)
-              & (jnp.abs(lead) <= hi))
-    if cfg.fit_duration:
-        ok &= (dur >= bounds[2]) & (dur <= bounds[3])
+def _in_bounds(cfg: _Config, tau: np.ndarray, zeta: np.ndarray, lead: np.ndarray,
+               dur: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    lo, hi = bounds[:, 0], bounds[:, 1]
+    with np.errstate(all="ignore"):
+        if cfg.order == 1:
+            ok = (tau >= lo) & (tau <= hi)
+        else:  # fast time constant ~tau/(2 zeta), sum 2 zeta tau, envelope decay tau/zeta, zero
+            ok = ((tau / (2 * zeta) >= lo) & (2 * zeta * tau <= hi) & (tau / zeta <= hi)
+                  & (np.abs(lead) <= hi))
+        if cfg.fit_duration:
+            ok &= (dur >= bounds[:, 2]) & (dur <= bounds[:, 3])
     return ok
 
 
-def _fit_one(cfg: _Config, t: jax.Array, y: jax.Array, m: jax.Array, duration: jax.Array,
-             theta_user: jax.Array, bounds: jax.Array) -> dict[str, jax.Array]:
-    """Start, solve and assess one trial (vmapped over trials by the caller)."""
-    n = jnp.sum(m)
-    args = (t, y, m, duration, 1.0 / jnp.sqrt(jnp.sum(m * y * y) / n))
-    theta_data = _start(cfg, t, y, m, duration, bounds)
-    theta0 = jnp.where(jnp.isfinite(theta_user), theta_user, theta_data)
-    solver = (optx.LevenbergMarquardt if cfg.solver == "levenberg_marquardt"
-              else optx.GaussNewton)(rtol=cfg.rtol, atol=cfg.atol)
-    sol = optx.least_squares(_solver_residual(cfg), solver, theta0, args=args,
-                             max_steps=cfg.max_steps, throw=False)
-    theta = _polish_shape(cfg, sol.value, args) if cfg.fit_duration else sol.value
-    shape, dur = _unpack(cfg, theta, duration)
-    basis = _basis(cfg, t, shape, dur)
-    gains = _gains(basis, y, m)
-    fit = basis @ gains
-    resid = (y - fit) * m
-    rss = resid @ resid
-    alpha = gains[0]
-    lead = gains[1] / gains[0] if cfg.order == 2 else jnp.zeros(())
+def _gram(columns: list[np.ndarray]) -> np.ndarray:
+    """(n, k, k) Gram matrices of k (n, p) columns."""
+    k = len(columns)
+    gram = np.empty((len(columns[0]), k, k))
+    for i in range(k):
+        for j in range(i, k):
+            gram[:, i, j] = gram[:, j, i] = np.sum(columns[i] * columns[j], axis=1)
+    return gram
 
-    # Standard errors from the model in natural parameters: alpha [, lead], tau [, zeta] [, T].
-    k = 2 * cfg.order  # parameters without T
 
-    def model(p: jax.Array) -> jax.Array:
-        b = _basis(cfg, t, p[cfg.order: k], p[k] if cfg.fit_duration else duration)
-        return p[0] * (b[:, 0] + (p[1] * b[:, 1] if cfg.order == 2 else 0.0))
+def _assess(cfg: _Config, theta: np.ndarray, theta_data: np.ndarray, from_data: np.ndarray,
+            solver_code: np.ndarray, t: np.ndarray, y: np.ndarray, m: np.ndarray,
+            duration: np.ndarray, bounds: np.ndarray) -> dict[str, np.ndarray]:
+    """Parameters, standard errors, statistics and the status code of every trial.
 
-    natural = [alpha[None]] + ([lead[None]] if cfg.order == 2 else []) + [shape]
-    p_hat = jnp.concatenate(natural + ([dur[None]] if cfg.fit_duration else []))
-    jac = jax.jacfwd(model)(p_hat) * m[:, None]
-    col = jnp.sqrt(jnp.sum(jac * jac, axis=0))
-    col = jnp.where(col > 0, col, 1.0)
-    scaled = jac / col  # column-scaled: its inverse Gram diagonal is the variance inflation
-    gram_inv = jnp.linalg.inv(scaled.T @ scaled)
-    s2 = rss / (n - cfg.n_params)
-    se = jnp.sqrt(s2 * jnp.diag(gram_inv)) / col
-    # Distance to a minimum: the Gauss-Newton step in all parameters but T (the pulse has a
-    # kink in T at every sample time, so a minimum in T may sit on a kink).
-    sub = scaled[:, :k]
-    gn_step = jnp.linalg.solve(sub.T @ sub, sub.T @ resid) / col[:k]
-    stationary = jnp.all(jnp.abs(gn_step)
-                         <= _STATIONARY_SE * se[:k] + 10 * cfg.rtol * jnp.abs(p_hat[:k]))
-    start_cost = jnp.sum(_residual(cfg, theta_data, args) ** 2)
-    end_cost = jnp.sum(_residual(cfg, theta, args) ** 2)
-    not_worse = end_cost <= start_cost * (1 + 1e-9)
-    identifiable = jnp.all(jnp.isfinite(se)) & (jnp.max(jnp.diag(gram_inv)) < _MAX_INFLATION)
-    code = jnp.select(
-        [sol.result == optx.RESULTS.nonlinear_max_steps_reached,
-         (sol.result == optx.RESULTS.nonfinite) | ~jnp.all(jnp.isfinite(p_hat)),
-         sol.result != optx.RESULTS.successful,
-         ~_in_bounds(cfg, shape, lead, dur, bounds),
-         ~identifiable,
-         ~(stationary & not_worse)],
-        [_CODE[s] for s in (FitStatus.MAX_STEPS, FitStatus.NONFINITE, FitStatus.SOLVER_ERROR,
-                            FitStatus.OUT_OF_RANGE, FitStatus.ILL_CONDITIONED,
-                            FitStatus.NOT_AT_MINIMUM)],
-        _CODE[FitStatus.CONVERGED])
-
-    fm, ym = jnp.sum(fit * m) / n, jnp.sum(y * m) / n
-    pearson = (jnp.sum(m * (y - ym) * (fit - fm))
-               / jnp.sqrt(jnp.sum(m * (y - ym) ** 2) * jnp.sum(m * (fit - fm) ** 2)))
-    n_free = cfg.n_params + 1  # + the noise variance
-    nan = jnp.full((), jnp.nan)
-    start_shape, start_dur = _unpack(cfg, theta0, duration)
+    Standard errors from the Jacobian of the model ``alpha (b0 + lead b1)`` in its natural
+    parameters (alpha, lead in s, tau in s, zeta, T in s; those the model has):
+    ``s^2 (J^T J)^-1`` with ``s^2 = RSS / (n - p)``. ``from_data`` (n,) bool: the solve
+    started at ``theta_data``; Levenberg-Marquardt never ends above its start there, so
+    only the other trials (and every Gauss-Newton one) are checked against it.
+    """
+    args = (t, y, m, duration)
+    model = _model(cfg, theta, *args, jacobian=True)
+    alpha, lead, tau, zeta, dur = (model[k] for k in ("alpha", "lead", "tau", "zeta",
+                                                      "duration"))
+    resid = model["resid"]
+    n = m.sum(axis=1)
+    names = ["alpha"] + (["lead"] if cfg.order == 2 else []) + ["tau"] + (
+        ["zeta"] if cfg.order == 2 else []) + (["duration"] if cfg.fit_duration else [])
+    with np.errstate(all="ignore"):
+        rss = np.sum(resid * resid, axis=1)
+        fit = (y - resid) * m
+        columns = [model["columns"][k] for k in names]
+        norms = np.sqrt(np.stack([np.sum(c * c, axis=1) for c in columns], axis=1))
+        norms = np.where(norms > 0, norms, 1.0)
+        # column-scaled: the inverse Gram diagonal is then the variance inflation
+        gram = _gram(columns) / (norms[:, :, None] * norms[:, None, :])
+        inflation = np.diagonal(_small_inverse(gram), axis1=1, axis2=2)
+        s2 = rss / (n - cfg.n_params)
+        se = np.sqrt(s2[:, None] * inflation) / norms
+        p_hat = np.stack([model[k] for k in names], axis=1)
+        # Distance to a minimum: the Gauss-Newton step in all parameters but T (the pulse
+        # has a kink in T at every sample time, so a minimum in T may sit on a kink).
+        k = 2 * cfg.order
+        rhs = np.stack([np.sum(c * resid, axis=1) for c in columns[:k]], axis=1) / norms[:, :k]
+        gn_step = _small_solve(gram[:, :k, :k], rhs) / norms[:, :k]
+        stationary = np.all(np.abs(gn_step) <= _STATIONARY_SE * se[:, :k]
+                            + 10 * cfg.rtol * np.abs(p_hat[:, :k]), axis=1)
+        check = ~from_data if cfg.solver == "levenberg_marquardt" else np.ones_like(from_data)
+        start_cost = np.zeros_like(rss)
+        if check.any():
+            start_cost[check] = _cost(cfg, theta_data[check], *(a[check] for a in args))
+        not_worse = ~check | (rss <= start_cost * (1 + 1e-9))
+        identifiable = np.all(np.isfinite(se), axis=1) & (np.max(inflation, axis=1)
+                                                          < _MAX_INFLATION)
+        code = np.select(
+            [solver_code == solver.MAX_STEPS,
+             (solver_code == solver.NONFINITE) | ~np.all(np.isfinite(p_hat), axis=1),
+             solver_code != solver.SUCCESS,
+             ~_in_bounds(cfg, tau, zeta, lead, dur, bounds),
+             ~identifiable,
+             ~(stationary & not_worse)],
+            [_CODE[s] for s in (FitStatus.MAX_STEPS, FitStatus.NONFINITE, FitStatus.SOLVER_ERROR,
+                                FitStatus.OUT_OF_RANGE, FitStatus.ILL_CONDITIONED,
+                                FitStatus.NOT_AT_MINIMUM)],
+            _CODE[FitStatus.CONVERGED])
+        fm = (np.sum(fit, axis=1) / n)[:, None]
+        ym = (np.sum(y * m, axis=1) / n)[:, None]
+        pearson = (np.sum(m * (y - ym) * (fit - fm), axis=1)
+                   / np.sqrt(np.sum(m * (y - ym) ** 2, axis=1)
+                             * np.sum(m * (fit - fm) ** 2, axis=1)))
+        n_free = cfg.n_params + 1  # + the noise variance
+        aic = n * np.log(rss / n) + 2 * n_free
+        bic = n * np.log(rss / n) + n_free * np.log(n)
+    nan = np.full(len(alpha), np.nan)
+    se_of = dict(zip(names, se.T, strict=True))
     return {
-        "alpha": alpha, "tau_s": shape[0], "zeta": shape[1] if cfg.order == 2 else nan,
+        "alpha": alpha, "tau_s": tau, "zeta": zeta if cfg.order == 2 else nan,
         "lead_s": lead if cfg.order == 2 else nan, "duration_s": dur,
-        "alpha_se": se[0], "tau_se_s": se[cfg.order],
-        "zeta_se": se[3] if cfg.order == 2 else nan, "lead_se_s": se[1] if cfg.order == 2 else nan,
-        "duration_se_s": se[k] if cfg.fit_duration else nan,
-        "rss": rss, "residual_std": jnp.sqrt(s2), "pearson_r": pearson,
-        "aic": n * jnp.log(rss / n) + 2 * n_free, "bic": n * jnp.log(rss / n) + n_free * jnp.log(n),
-        "code": code, "n_steps": sol.stats["num_steps"],
-        "start_tau_s": start_shape[0], "start_duration_s": start_dur if cfg.fit_duration else nan,
+        "alpha_se": se_of["alpha"], "tau_se_s": se_of["tau"], "zeta_se": se_of.get("zeta", nan),
+        "lead_se_s": se_of.get("lead", nan), "duration_se_s": se_of.get("duration", nan),
+        "rss": rss, "residual_std": np.sqrt(s2), "pearson_r": pearson, "aic": aic, "bic": bic,
+        "code": code,
     }
 
 
-@functools.cache
-def _compiled(cfg: _Config) -> Any:
-    return jax.jit(jax.vmap(functools.partial(_fit_one, cfg)))
-
-
-# --------------------------------------------------------------------------- numpy shell
 def _per_trial(name: str, value: ArrayLike | None, n_trials: int) -> np.ndarray:
     """A scalar or per-trial option as (n_trials,) float64; None gives NaN."""
     if value is None:
@@ -502,31 +533,52 @@ def _bad_trials(cfg: _Config, t: np.ndarray, y: np.ndarray, m: np.ndarray,
     return bad
 
 
+def _flattens(t_s: np.ndarray, y: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(n,) bool: the counts flatten, the sign of saturation in a ramp region.
+
+    ``t_s``, ``y``, ``mask`` (n, n_points). The valid points of each trial are cut into
+    thirds and a line fitted to each: the counts flatten when the last third rises at less
+    than half the steeper of the first two. A ramp response (eq. 17) is convex, its slope
+    never falls; on the marker-event scene the ratio is 0.99-1.10 for every unsaturated slip
+    and 0.13-0.25 for the saturated ones.
+    """
+    out = np.zeros(len(y), bool)
+    for i in range(len(y)):  # a handful of failed trials: a loop over trials, not samples
+        t, v = t_s[i][mask[i]], y[i][mask[i]]
+        if len(t) < 9:
+            continue
+        thirds = np.array_split(np.arange(len(t)), 3)
+        slopes = [np.polyfit(t[k], v[k], 1)[0] for k in thirds]
+        out[i] = max(slopes[:2]) > 0 and slopes[2] < 0.5 * max(slopes[:2])
+    return out
+
+
 def _fit(cfg: _Config, t_s: ArrayLike, y: ArrayLike, mask: ArrayLike | None, *,
          duration_s: ArrayLike | None, tau0_s: ArrayLike | None, zeta0: ArrayLike | None,
          duration0_s: ArrayLike | None, tau_bounds_s: tuple[float, float] | None,
-         chunk_size: int, keep_failed: bool) -> FosFitResult:
+         chunk_size: int, keep_failed: bool, min_points: int = 0) -> FosFitResult:
     t, y, m = _prepare(t_s, y, mask)
     n_trials, n_points = y.shape
     known_dur = _per_trial("duration_s", duration_s, n_trials)
     tv, yv = np.where(m, t, 0.0), np.where(m, y, 0.0)
     bad = _bad_trials(cfg, tv, yv, m, known_dur)
 
-    # Starting values in solver coordinates (see `_unpack`); NaN: data-driven.
+    # Starting values in solver coordinates (see `solver.unpack`); NaN: data-driven.
+    theta_user = np.full((n_trials, solver.N_THETA), np.nan)
     tau0 = _user_start("tau0_s", tau0_s, n_trials)
-    start = [np.log(tau0)]
     if cfg.order == 2:
         zeta = _user_start("zeta0", zeta0, n_trials)
-        start = [np.log(2 * zeta * tau0), 2 * np.log(tau0)]
+        theta_user[:, 0], theta_user[:, 1] = np.log(2 * zeta * tau0), 2 * np.log(tau0)
+    else:
+        theta_user[:, 0] = np.log(tau0)
     if cfg.fit_duration:
-        start.append(np.log(_user_start("duration0_s", duration0_s, n_trials)))
-    theta_user = np.stack(start, axis=1)
+        theta_user[:, 2] = np.log(_user_start("duration0_s", duration0_s, n_trials))
 
     # Pad to whole chunks of a bucketed length. Bad trials get a clean, quickly converging
     # substitute problem so that they cannot hold up a chunk (a vmapped loop runs until its
     # slowest trial stops); their results are discarded.
-    n_pad = -(-max(n_points, 1) // _POINT_BUCKET) * _POINT_BUCKET
-    chunk = min(chunk_size, max(8, 1 << max(n_trials - 1, 0).bit_length()))
+    n_pad = _bucket(max(n_points, min_points, 1))
+    chunk = chunk_size  # every call the same shape: one compilation for every batch size
     n_rows = -(-max(n_trials, 1) // chunk) * chunk
     tt, yy, mm = (np.zeros((n_rows, n_pad)) for _ in range(3))
     tt[:n_trials, :n_points], yy[:n_trials, :n_points], mm[:n_trials, :n_points] = tv, yv, m
@@ -535,10 +587,11 @@ def _fit(cfg: _Config, t_s: ArrayLike, y: ArrayLike, mask: ArrayLike | None, *,
     grid = np.arange(n_pad, dtype=np.float64)
     tt[dummy], mm[dummy] = grid, 1.0
     yy[dummy] = 1000.0 * unit_response(cfg.kind, grid, n_pad / 8, n_pad / 2)
-    dur_rows = np.full(n_rows, n_pad / 2)
-    dur_rows[:n_trials] = np.where(bad, n_pad / 2, known_dur)
-    theta_rows = np.full((n_rows, cfg.n_nonlinear), np.nan)
-    theta_rows[:n_trials] = np.where(bad[:, None], np.nan, theta_user)
+    # T is an input only for a pulse of known length; a step is the pulse with T = inf.
+    known = cfg.kind == "pulse" and not cfg.fit_duration
+    dur_rows = np.full(n_rows, n_pad / 2 if known else np.inf)
+    if known:
+        dur_rows[:n_trials] = np.where(bad, n_pad / 2, known_dur)
 
     # Bounds: tau from half a bin to five times the region; a fitted T strictly inside.
     t_last = np.max(np.where(mm > 0, tt, -np.inf), axis=1)
@@ -551,28 +604,62 @@ def _fit(cfg: _Config, t_s: ArrayLike, y: ArrayLike, mask: ArrayLike | None, *,
             raise ValueError(f"`tau_bounds_s` (={tau_bounds_s}) must be (low, high) seconds "
                              "with 0 < low < high.")
         bounds[~dummy, 0], bounds[~dummy, 1] = lo, hi
+    theta_data = _starts(cfg, tt, yy, mm, dur_rows, bounds)
+    theta0 = theta_data.copy()
+    theta0[:n_trials] = np.where(np.isfinite(theta_user) & ~bad[:, None], theta_user,
+                                 theta_data[:n_trials])
 
-    fn = _compiled(cfg)
-    with jax.enable_x64(True):
-        # All chunks are dispatched before any result is read, so they queue back to back.
-        outs = [fn(*(jnp.asarray(a[s: s + chunk])
-                     for a in (tt, yy, mm, dur_rows, theta_rows, bounds)))
-                for s in range(0, n_rows, chunk)]
-        out = {k: np.concatenate([np.asarray(o[k]) for o in outs])[:n_trials] for k in outs[0]}
-
+    theta, solver_code, n_steps = run_solver(
+        cfg.static, (tt, yy, mm, dur_rows, theta0),
+        (cfg.kind == "ramp", cfg.order == 2, cfg.fit_duration), chunk=chunk)
+    keep = slice(0, n_trials)
+    args = (tt[keep], yy[keep], mm[keep], dur_rows[keep])
+    theta = theta[keep]
+    if cfg.fit_duration:
+        theta = _polish(cfg, theta, *args)
+    from_data = ~np.any(np.isfinite(theta_user), axis=1) | bad
+    out = _assess(cfg, theta, theta_data[keep], from_data, solver_code[keep], *args,
+                  bounds[keep])
     code = np.where(bad, _CODE[FitStatus.BAD_INPUT], out.pop("code"))
+    if cfg.kind == "ramp" and cfg.order == 1:  # a stalled ramp on flattening counts
+        stalled = np.flatnonzero(code == _CODE[FitStatus.MAX_STEPS])
+        code[stalled[_flattens(tv[stalled], yv[stalled], m[stalled])]] = _CODE[
+            FitStatus.SATURATED]
+    start_tau, _, start_dur = unpack(theta0[keep], dur_rows[keep], cfg.order == 2,
+                                     cfg.fit_duration, xp=np)
+    out["start_tau_s"] = start_tau
+    out["start_duration_s"] = start_dur if cfg.fit_duration else np.full(n_trials, np.nan)
     for key in _FIT_FIELDS + ("start_tau_s", "start_duration_s"):
-        out[key] = out[key].astype(np.float64)
+        out[key] = np.asarray(out[key], dtype=np.float64).copy()
         out[key][bad] = np.nan  # results of the substitute problem
     if cfg.kind != "pulse":
         out["duration_s"][:] = np.nan
     result = FosFitResult(
         kind=cfg.kind, order=cfg.order, duration_fitted=cfg.fit_duration,
-        n_params=cfg.n_params, n_points=m.sum(axis=1),
-        tau_min_s=np.where(bad, np.nan, bounds[:n_trials, 0]),
-        tau_max_s=np.where(bad, np.nan, bounds[:n_trials, 1]),
+        n_params=cfg.n_params, n_points=m.sum(axis=1), n_steps=n_steps[keep],
+        tau_min_s=np.where(bad, np.nan, bounds[keep, 0]),
+        tau_max_s=np.where(bad, np.nan, bounds[keep, 1]),
         status=np.array([s.value for s in _STATUS_BY_CODE])[code], **out)
     return result if keep_failed else result.drop_failed()
+
+
+def run_solver(spec: SolverSpec, arrays: tuple[np.ndarray, ...], flags: tuple[bool, ...], *,
+               chunk: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Run the compiled solver over whole chunks of ``chunk`` rows: ``arrays`` are (t, y, m,
+    duration, theta0) as :func:`tactile_cli.fos.solver.chunk_function` takes them; returns
+    (theta, code, n_steps) for every row."""
+    from .compile_cache import solver_program
+
+    n_rows, n_points = arrays[0].shape
+    fn = solver_program(spec, chunk, n_points)
+    flag_args = tuple(np.bool_(f) for f in flags)
+    with jax.enable_x64(True):
+        # All chunks are dispatched before any result is read, so they queue back to back.
+        outs = [fn(*(a[s: s + chunk] for a in arrays), *flag_args)
+                for s in range(0, n_rows, chunk)]
+        theta, code, steps = (np.concatenate([np.asarray(o[i]) for o in outs])
+                              for i in range(3))
+    return theta, code, steps
 
 
 # --------------------------------------------------------------------------- public API
@@ -587,15 +674,16 @@ class FitOptions:
     or ``GaussNewton`` (about half the compile and run time, but from starts that far off
     it diverges; those trials are flagged, not kept). ``max_steps``, ``rtol``, ``atol``:
     solver limits, the tolerances acting on log(tau) and on residuals scaled by the data's
-    RMS. ``chunk_size``: trials per compiled, vmapped solve (a chunk runs as many steps as
-    its slowest trial).
+    RMS. ``chunk_size``: trials per compiled, vmapped solve; every batch is padded to whole
+    chunks, so one compilation serves every batch size (a chunk runs as many steps as its
+    slowest trial; 64 ran fastest per trial on 2 CPU cores, 1024 1.7x slower).
     """
 
     solver: Solver = "levenberg_marquardt"
     max_steps: int = 64
     rtol: float = 1e-4
     atol: float = 1e-4
-    chunk_size: int = 1024
+    chunk_size: int = 64
 
     def __post_init__(self) -> None:
         if self.solver not in ("levenberg_marquardt", "gauss_newton"):

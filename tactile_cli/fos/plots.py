@@ -4,7 +4,9 @@ One small panel per trial: the counts that were fitted (points; for the slip, af
 press tail was subtracted) and the fitted first-order curve, with R in the title. Pages are
 grids of at most :data:`PANELS_PER_PAGE` panels: one page (or more) per force grade when the
 trials carry ``force_grade`` labels, else pages in trial order. Failed fits are drawn too,
-their data without a curve and their status in the title.
+their data without a curve and their status in the title. Curves from CSV files get one
+figure each, named after their input and labelled in their own unit
+(:func:`plot_curve_fits`).
 """
 
 from __future__ import annotations
@@ -106,4 +108,43 @@ def plot_region_fits(
     return written
 
 
-__all__ = ["PANELS_PER_PAGE", "plot_region_fits"]
+def plot_curve_fits(
+    rf: RegionFits,
+    out_dir: str | Path,
+    *,
+    quantities: Sequence[str] | None = None,
+) -> list[Path]:
+    """One PNG per fitted curve (from :func:`tactile_cli.fos.protocol.fit_curves`), named
+    after its row, ``{name}.png`` (the CSV file's stem): data, fitted curve, R or the
+    status. ``quantities``: the response's name per row for the y label (default
+    ``"response"``), the unit from ``rf``."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    for i, name in enumerate(rf.trials):
+        m = rf.mask[i]
+        t, y = rf.t_s[i][m], rf.y[i][m]
+        fig, ax = plt.subplots(figsize=(4.8, 3.4), constrained_layout=True)
+        ax.plot(t, y, ".", ms=3, color="0.35", label="data")
+        if rf.ok[i] and len(t):
+            fine = np.linspace(0.0, t.max(), 400)
+            ax.plot(fine, rf.curve(i, fine), "-", color="tab:red", lw=1.4,
+                    label=f"{rf.model} fit")
+            note = (f"R = {rf.fit.pearson_r[i]:.4f}, alpha = {rf.fit.alpha[i]:.4g} "
+                    f"{rf.unit(i)}, tau = {rf.fit.tau_s[i]:.4g} s")
+        else:
+            note = str(rf.status[i])
+        quantity = quantities[i] if quantities is not None else "response"
+        ax.set_title(f"{name}\n{note}", fontsize=8)
+        ax.set_xlabel("t from the start (s)", fontsize=8)
+        ax.set_ylabel(f"{quantity} ({rf.unit(i)})", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=7, frameon=False)
+        path = out_dir / f"{safe_name(name)}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+__all__ = ["PANELS_PER_PAGE", "plot_curve_fits", "plot_region_fits"]

@@ -44,6 +44,10 @@ NO_REGIONS = "no_regions"
 NOT_TESTED = "not_tested"
 #: Model fitted to each region.
 REGION_MODELS = {"press": "pulse", "slip": "ramp"}
+#: The unit of counts and of their alpha.
+COUNT_UNITS = "events/bin"
+#: A curve's unit when neither the caller nor its file names one.
+DEFAULT_UNITS = "units"
 
 
 @dataclass(frozen=True)
@@ -55,7 +59,8 @@ class RegionFits:
     where ``mask`` is False. ``start_s``/``end_s``: the region in trial seconds.
     ``status`` is the fit's :class:`~tactile_cli.fos.FitStatus` value, ``press_failed`` or
     ``no_regions``; ``detail`` (n,) a trial-specific explanation (e.g. the segmentation's
-    message) or ``""``.
+    message) or ``""``. ``units``: the unit of ``y`` and alpha per row (``"events/bin"``
+    for counts; a curve's own unit).
     """
 
     region: str
@@ -71,6 +76,7 @@ class RegionFits:
     delta_bic: np.ndarray
     status: np.ndarray
     detail: np.ndarray | None = None
+    units: tuple[str, ...] | None = None
 
     def __len__(self) -> int:
         return len(self.trials)
@@ -79,6 +85,10 @@ class RegionFits:
     def ok(self) -> np.ndarray:
         """(n,) bool: the fit converged."""
         return self.status == FitStatus.CONVERGED.value
+
+    def unit(self, i: int) -> str:
+        """The unit of row ``i``'s response and alpha."""
+        return COUNT_UNITS if self.units is None else self.units[i]
 
     def message(self, i: int) -> str:
         """What the status of trial ``i`` means."""
@@ -100,12 +110,12 @@ class RegionFits:
                                     f.tau_s[i], duration)
 
 
-def _region_arrays(trials: Sequence[TrialRegions], region: str
+def _region_arrays(trials: Sequence[TrialRegions], region: str, width: int = 1
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
     """Padded (n, n_points) times from the region start, counts and mask, plus each trial's
-    bin indices in the region."""
+    bin indices in the region; ``n_points`` is the longest region, at least ``width``."""
     idx = [np.flatnonzero(tr.in_region(region)) for tr in trials]
-    n_points = max(1, max(len(i) for i in idx))
+    n_points = max(1, width, max(len(i) for i in idx))
     t = np.zeros((len(trials), n_points))
     y = np.zeros((len(trials), n_points))
     m = np.zeros((len(trials), n_points), bool)
@@ -177,7 +187,10 @@ def fit_regions(
     detail = np.array([tr.regions_note for tr in trials], dtype=object)
     out: dict[str, RegionFits] = {}
 
-    t, y, m, _ = _region_arrays(trials, "press")
+    # Both regions padded to one width, so that every fit of the file runs through the
+    # same compiled solver (its shape is bucketed by the number of points).
+    width = max(int(tr.in_region(r).sum()) for tr in trials for r in ("press", "slip"))
+    t, y, m, _ = _region_arrays(trials, "press", width)
     press_fit, verdict, delta = _fit("pulse", t, y, m, duration_s=press_duration_s,
                                      order=order and "press" in regions, options=options)
     starts = np.array([tr.press_s[0] for tr in trials])
@@ -190,7 +203,7 @@ def fit_regions(
     if "slip" not in regions:
         return out
 
-    t, y, m, idx = _region_arrays(trials, "slip")
+    t, y, m, idx = _region_arrays(trials, "slip", width)
     for row, (tr, i) in enumerate(zip(trials, idx, strict=True)):
         # the press response continues into the slip region (linear superposition)
         tail = press.curve(row, tr.t_s[i] - tr.press_s[0])
@@ -208,31 +221,66 @@ def fit_regions(
     return out
 
 
+def fit_curves(
+    curves: Sequence[tuple[ArrayLike, ArrayLike]],
+    *,
+    model: str,
+    names: Sequence[str] | None = None,
+    units: Sequence[str] | None = None,
+    press_duration_s: float | None = None,
+    order: bool = True,
+    options: FitOptions | None = None,
+) -> RegionFits:
+    """Fit several response curves (e.g. users' two-column CSVs) with ``model`` in
+    ``("pulse", "step", "ramp")``, all in one batched fit: ``curves`` is a sequence of
+    ``(t_s, x)``, (n_i,) seconds from each input's start and the response. ``names`` label
+    the rows (default ``curve_0``, ...), ``units`` give each response's unit (default
+    ``"units"``). For ``"pulse"``, ``press_duration_s`` is the known T (None fits it)."""
+    if model not in ("pulse", "step", "ramp"):
+        raise ValueError(f"`model` (={model!r}) must be 'pulse', 'step' or 'ramp'.")
+    if not curves:
+        raise ValueError("`curves` is empty: nothing to fit.")
+    _check_duration(press_duration_s)
+    n = len(curves)
+    names = tuple(names) if names is not None else tuple(f"curve_{i}" for i in range(n))
+    units = tuple(units) if units is not None else (DEFAULT_UNITS,) * n
+    if len(names) != n or len(units) != n:
+        raise ValueError(f"`names` ({len(names)}) and `units` ({len(units)}) must have one "
+                         f"entry per curve ({n}).")
+    arrays = [(np.asarray(t, dtype=np.float64), np.asarray(x, dtype=np.float64))
+              for t, x in curves]
+    for i, (ti, xi) in enumerate(arrays):
+        if ti.ndim != 1 or ti.shape != xi.shape:
+            raise ValueError(f"curve {i}: `t_s` {ti.shape} and `x` {xi.shape} must be (n,) "
+                             "arrays of the same length.")
+    width = max(len(t) for t, _ in arrays)
+    t, y, m = np.zeros((n, width)), np.zeros((n, width)), np.zeros((n, width), bool)
+    for row, (ti, xi) in enumerate(arrays):
+        t[row, :len(ti)], y[row, :len(xi)], m[row, :len(ti)] = ti, xi, True
+    fit, verdict, delta = _fit(model, t, y, m, duration_s=press_duration_s, order=order,
+                               options=options or FitOptions())
+    starts = np.array([ti[0] for ti, _ in arrays])
+    ends = np.array([ti[-1] for ti, _ in arrays])
+    return RegionFits("curve", model, names, starts, ends, t, y, m, fit, verdict, delta,
+                      fit.status.astype(str), units=units)
+
+
 def fit_curve(
     t_s: ArrayLike,
     x: ArrayLike,
     *,
     model: str,
     name: str = "curve",
+    units: str = DEFAULT_UNITS,
     press_duration_s: float | None = None,
     order: bool = True,
     options: FitOptions | None = None,
 ) -> RegionFits:
-    """Fit one response curve (e.g. a user's two-column CSV) with ``model`` in
-    ``("pulse", "step", "ramp")``: t_s (n,) seconds from the input's start, x (n,) the
-    response. For ``"pulse"``, ``press_duration_s`` is the known T (None fits it)."""
-    if model not in ("pulse", "step", "ramp"):
-        raise ValueError(f"`model` (={model!r}) must be 'pulse', 'step' or 'ramp'.")
-    _check_duration(press_duration_s)
-    t = np.asarray(t_s, dtype=np.float64)[None, :]
-    y = np.asarray(x, dtype=np.float64)[None, :]
-    m = np.ones_like(y, dtype=bool)
-    fit, verdict, delta = _fit(model, t, y, m, duration_s=press_duration_s, order=order,
-                               options=options or FitOptions())
-    span = np.array([t[0, 0]]), np.array([t[0, -1]])
-    return RegionFits("curve", model, (name,), *span, t, y, m, fit, verdict, delta,
-                      fit.status.astype(str))
+    """Fit one response curve: :func:`fit_curves` of ``[(t_s, x)]``."""
+    return fit_curves([(t_s, x)], model=model, names=[name], units=[units],
+                      press_duration_s=press_duration_s, order=order, options=options)
 
 
-__all__ = ["NOT_TESTED", "NO_REGIONS", "PRESS_FAILED", "REGION_MODELS", "RegionFits", "fit_curve",
-           "fit_regions", "region_arrays"]
+__all__ = ["COUNT_UNITS", "DEFAULT_UNITS", "NOT_TESTED", "NO_REGIONS", "PRESS_FAILED",
+           "REGION_MODELS", "RegionFits", "fit_curve", "fit_curves", "fit_regions",
+           "region_arrays"]

@@ -5,7 +5,8 @@ The layout of ``/derived/fits/fos_press`` and ``/derived/fits/fos_slip`` (writte
 :data:`COLUMNS`, one row per trial, in the file's trial order. Units: ``alpha`` and
 ``alpha_se`` in events per bin; ``tau_s``, ``tau_se``, ``duration_s``, ``duration_se``,
 ``region_start_s``, ``region_end_s`` in seconds (region bounds from the trial's time
-origin); ``residual_std`` in events per bin; ``delta_bic`` = BIC(first order) - BIC(second
+origin); ``residual_std`` in events per bin and ``rss`` (the residual sum of squares) in
+(events per bin)^2; ``delta_bic`` = BIC(first order) - BIC(second
 order), > 0 favouring the second. Parameters of fits that did not converge are NaN and
 their ``status`` says why. Group attributes: ``region``, ``model``, ``bin_s``,
 ``duration_fitted``, ``criterion``, ``units_json``, besides the provenance attributes every
@@ -34,7 +35,7 @@ if TYPE_CHECKING:  # the fitting code (and jax) is not needed to read a fits gro
 #: Columns of a fits group, in order.
 COLUMNS: tuple[str, ...] = (
     "trial", "alpha", "alpha_se", "tau_s", "tau_se", "duration_s", "duration_se",
-    "residual_std", "pearson_r", "aic", "bic", "status", "n_steps", "n_points",
+    "residual_std", "rss", "pearson_r", "aic", "bic", "status", "n_steps", "n_points",
     "region_start_s", "region_end_s", "order_verdict", "delta_bic",
 )
 STRING_COLUMNS = frozenset({"trial", "status", "order_verdict"})
@@ -42,8 +43,10 @@ INT_COLUMNS = frozenset({"n_steps", "n_points"})
 UNITS = {
     "alpha": "events/bin", "alpha_se": "events/bin", "tau_s": "s", "tau_se": "s",
     "duration_s": "s", "duration_se": "s", "residual_std": "events/bin",
-    "region_start_s": "s", "region_end_s": "s",
+    "rss": "(events/bin)^2", "region_start_s": "s", "region_end_s": "s",
 }
+#: Columns that groups written before they existed lack; :func:`read_fit_group` derives them.
+_DERIVED_ON_READ = frozenset({"rss"})
 #: Group names of the two regions under /derived/fits.
 GROUP_NAMES = {"press": "fos_press", "slip": "fos_slip"}
 
@@ -55,7 +58,8 @@ def fit_columns(rf: RegionFits) -> dict[str, np.ndarray]:
         "trial": np.array(rf.trials, dtype=object),
         "alpha": f.alpha, "alpha_se": f.alpha_se, "tau_s": f.tau_s, "tau_se": f.tau_se_s,
         "duration_s": f.duration_s, "duration_se": f.duration_se_s,
-        "residual_std": f.residual_std, "pearson_r": f.pearson_r, "aic": f.aic, "bic": f.bic,
+        "residual_std": f.residual_std, "rss": f.rss, "pearson_r": f.pearson_r, "aic": f.aic,
+        "bic": f.bic,
         "status": np.array(rf.status, dtype=object),
         "n_steps": np.asarray(f.n_steps, dtype=np.int64),
         "n_points": np.asarray(f.n_points, dtype=np.int64),
@@ -75,11 +79,12 @@ def fit_records(
     rf: RegionFits, labels: Sequence[Mapping[str, Any]] | None = None
 ) -> list[dict[str, Any]]:
     """One JSON-ready dict per trial: region, model, ``force_level``/``force_grade`` when the
-    labels have them, the :data:`COLUMNS` and the status message (NaN becomes None)."""
+    labels have them, the :data:`COLUMNS`, the unit of alpha and of the response
+    (``units``) and the status message (NaN becomes None)."""
     cols = fit_columns(rf)
     out = []
     for i in range(len(rf)):
-        row: dict[str, Any] = {"region": rf.region, "model": rf.model}
+        row: dict[str, Any] = {"region": rf.region, "model": rf.model, "units": rf.unit(i)}
         lab = labels[i] if labels is not None else {}
         for key in ("force_level", "force_grade"):
             if key in lab:
@@ -141,11 +146,16 @@ def read_fit_group(source: str | Path | TactileFile, name: str) -> dict[str, np.
         raise InputError(f"no /derived/fits/{name}; write it with `tactile fit-fos {path}`",
                          path=path)
     group = source.derived("fits", name, strings=STRING_COLUMNS)
-    missing = [c for c in COLUMNS if c not in group.columns]
+    missing = [c for c in COLUMNS if c not in group.columns and c not in _DERIVED_ON_READ]
     if missing:
         raise InputError(f"column {missing[0]!r} is missing; re-run `tactile fit-fos "
                          f"{path} --overwrite`", path=path, where=group.where)
-    return {c: group.columns[c] for c in COLUMNS}
+    out = {c: group.columns[c] for c in COLUMNS if c in group.columns}
+    if "rss" not in out:  # written before rss was stored: s^2 (n - p)
+        n_params = 3 if bool(group.attrs.get("duration_fitted", False)) else 2
+        dof = np.asarray(out["n_points"], dtype=np.float64) - n_params
+        out["rss"] = np.asarray(out["residual_std"], dtype=np.float64) ** 2 * dof
+    return {c: out[c] for c in COLUMNS}
 
 
 __all__ = ["COLUMNS", "GROUP_NAMES", "UNITS", "fit_columns", "fit_records", "read_fit_group",

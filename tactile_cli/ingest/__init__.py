@@ -2,7 +2,8 @@
 
 Each format has its own module with one entry function
 ``ingest_<format>(inputs, writer, options, progress)`` that adds sensors and trials to a
-:class:`~tactile_cli.store.StoreWriter`. :func:`ingest` picks the format, opens the writer
+:class:`~tactile_cli.store.StoreWriter` (and may return one-line notes for the user about
+assumptions the file records). :func:`ingest` picks the format, opens the writer
 (temporary file, validation, atomic rename), adds run-wide labels and then the ground-truth
 sidecars (``--annotations``, ``--trial-labels``; see :mod:`tactile_cli.ingest.sidecars`).
 """
@@ -10,7 +11,7 @@ sidecars (``--annotations``, ``--trial-labels``; see :mod:`tactile_cli.ingest.si
 from __future__ import annotations
 
 import importlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,7 @@ class IngestOptions:
     frame_rate_hz: float | None = None  # image folders without timestamps.csv (default 30 Hz)
     annotations: Path | None = None  # CSV trial,start_s,end_s,label (see ingest.sidecars)
     trial_labels: Path | None = None  # CSV trial,<label>... (see ingest.sidecars)
+    skip_unknown: bool = False  # AEDAT4: leave out streams of unknown type (else an error)
 
     def as_config(self) -> dict[str, Any]:
         out = asdict(self)
@@ -67,15 +69,15 @@ def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
     kinds = set()
     for path in inputs:
         if path.is_dir():
-            if any(
-                p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".")
-                for p in path.iterdir()
-            ):
+            from .image_sequence import image_sequence_folders
+
+            if image_sequence_folders(path):  # frames, or folders of frames
                 kinds.add("images")
             else:
                 raise InputError(
-                    "cannot tell the format of a folder; pass `format='accel-tree'`, "
-                    "`format='images'`, or `mapping='FILE.yaml'`",
+                    "cannot tell the format of a folder (no PNG/JPG frames in it or in its "
+                    "subfolders); pass `format='accel-tree'`, `format='images'`, or "
+                    "`mapping='FILE.yaml'`",
                     path=path,
                 )
         elif path.suffix.lower() == ".aedat4":
@@ -106,11 +108,14 @@ def ingest(
     compression: Compression = DEFAULT_COMPRESSION,
     progress: Progress | None = None,
     command: str | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> Path:
     """Ingest raw recordings into one validated tactile HDF5 file; returns its path.
 
     Nothing is written unless the whole ingest succeeds: on any error the temporary
-    file is removed and an existing ``out`` is left as it was.
+    file is removed and an existing ``out`` is left as it was. on_note: called, once the
+    file is written, with each one-line note about an assumption the readers made and the
+    file records (image folders without timestamps: the frame rate assumed).
     """
     options = options or IngestOptions()
     progress = progress or NullProgress()
@@ -138,7 +143,7 @@ def ingest(
     ) as writer:
         module_name, func_name = FORMATS[fmt].split(":")
         reader = getattr(importlib.import_module(module_name), func_name)
-        reader(paths, writer, options, progress)
+        notes = reader(paths, writer, options, progress) or []  # a reader may return notes
         if not writer.trial_names:
             raise InputError("no trials found in the inputs", path=paths[0])
         if options.labels:
@@ -148,7 +153,11 @@ def ingest(
         for sidecar in (options.annotations, options.trial_labels):
             if sidecar is not None:
                 writer.add_source(sidecar)
-        return writer.commit()
+        written = writer.commit()
+    if on_note is not None:
+        for note in notes:
+            on_note(note)
+    return written
 
 
 def parse_labels(pairs: Sequence[str]) -> dict[str, str | int | float]:

@@ -51,11 +51,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config_file import decode_utf8, os_error
+from ..config_file import os_error
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter
 from . import IngestOptions
+from .csv_records import first_record, record_cells
 from .mapped_csv import natural_key, read_csv_header, read_csv_table
 from .mapping import CsvDialect
 
@@ -144,10 +145,10 @@ def _dialect(path: Path) -> CsvDialect:
     """Header or not, from the first line: 8 numbers are data."""
     try:
         with open(path, "rb") as f:
-            first = decode_utf8(f.readline(), path).strip()
+            first = first_record(f)
     except OSError as exc:
         raise os_error(exc, path, "CSV file") from None
-    fields = first.split(",")
+    fields = [c.strip() for c in record_cells(first.strip(), path)]
     if len(fields) != len(COLUMNS):
         raise InputError(f"first line has {len(fields)} fields, expected {len(COLUMNS)} "
                          f"({', '.join(COLUMNS)})", path=path, where="line 1")

@@ -1,23 +1,25 @@
-"""AEDAT4 event files as iniVation cameras (DVXplorer, DAVIS) and DV software write them.
+"""AEDAT4 files as iniVation cameras (DVXplorer, DAVIS) and DV software write them.
 
 Decoding is done by the maintained ``aedat`` package (its Rust decoder handles the LZ4 and
 Zstd packet compression); this module streams its packets into the store. One trial per
-input file (named after the file stem) holds the file's polarity-event stream: ``t`` in
-microseconds as recorded (absolute, with the camera's time offset applied by the
-recorder), ``x``/``y`` in pixels, and the ON/OFF flag stored as +1/-1.
+input file (named after the file stem) holds every stream of the file:
 
-What is ingested and what is not:
-
-- the event stream, with the sensor size written in the file (``--width``/``--height``, if
-  given, must agree with it);
-- the sensor is named after the camera (the ``source`` attribute of the stream, e.g.
-  ``DVXplorer_DXB00010``) unless ``--sensor`` names it;
-- the trial's time 0 is its first event (events attribute ``t_origin_us``);
-- IMU, trigger and frame streams are ignored (their packets are skipped);
-- a file with several event streams is refused, since a trial holds one event stream.
+- the polarity-event stream: ``t`` in microseconds as recorded (absolute, with the
+  camera's time offset applied by the recorder), ``x``/``y`` in pixels, and the ON/OFF flag
+  stored as +1/-1; the sensor size is the file's (``--width``/``--height``, if given, must
+  agree with it); the trial's time 0 is its first event (events attribute ``t_origin_us``);
+- APS frames as the trial's image stream, IMU samples as the sampled stream ``imu`` and
+  triggers as annotations (:mod:`tactile_cli.ingest.aedat4_streams`);
+- the event sensor is named after the camera (the ``source`` attribute of the stream, e.g.
+  ``DVXplorer_DXB00010``) unless ``--sensor`` names it; the IMU sensor is ``<camera>_imu``;
+- a stream of a type the decoder does not read (``POSE``, ``BBOX``, ...) is an error, or,
+  with ``skip_unknown=True``, left out with a note (:mod:`tactile_cli.ingest.aedat4_filter`);
+- a file needs exactly one event stream and at most one frame stream, since a trial holds
+  one of each.
 
 Packets are gathered into chunks of ``IngestOptions.chunk_events`` events before they are
-checked and appended, so memory stays bounded. Progress counts bytes of the file.
+checked and appended, so memory stays bounded (frames are appended one by one; IMU samples
+and triggers, a few kB per second, are held until the file ends). Progress counts bytes.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import os
 import re
 import struct
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -40,6 +43,8 @@ from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import EventAppender, StoreWriter
 from . import IngestOptions
+from .aedat4_filter import KNOWN_TYPES, copy_without_streams, unknown_streams
+from .aedat4_streams import FrameCollector, ImuCollector, TriggerCollector
 from .events_table import DEFAULT_SENSOR, event_sensor
 
 MAGIC = b"#!AER-DAT4.0\r\n"
@@ -61,15 +66,18 @@ class StreamInfo:
 
 
 def ingest_aedat4(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                  progress: Progress) -> None:
-    """Add one trial per AEDAT4 file: its polarity events, chunk by chunk."""
+                  progress: Progress) -> list[str]:
+    """Add one trial per AEDAT4 file with all its streams; returns one note per stream
+    skipped (``options.skip_unknown``)."""
     for path in inputs:
         if not path.is_file():
             raise InputError("not a file (a folder?); give .aedat4 files", path=path)
-    progress.start(sum(p.stat().st_size for p in inputs), "AEDAT4 events")
+    progress.start(sum(p.stat().st_size for p in inputs), "AEDAT4 streams")
+    notes: list[str] = []
     for path in inputs:
-        _ingest_file(path, writer, options, progress)
+        notes += _ingest_file(path, writer, options, progress)
     progress.finish()
+    return notes
 
 
 def read_streams(path: Path) -> dict[int, StreamInfo]:
@@ -84,9 +92,27 @@ def read_streams(path: Path) -> dict[int, StreamInfo]:
 
 
 def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
-                 progress: Progress) -> None:
+                 progress: Progress) -> list[str]:
     check_layout(path)
-    streams = read_streams(path)
+    unknown = unknown_streams(path)
+    if unknown and not options.skip_unknown:
+        sid, kind = min(unknown.items())
+        raise InputError(f"stream {sid} has type {kind or '(none)'!r}, which the AEDAT4 decoder "
+                         f"does not read (it reads {', '.join(KNOWN_TYPES)}); pass "
+                         "`skip_unknown=True` to ingest the other streams", path=path)
+    if not unknown:
+        _ingest_streams(path, path, writer, options, progress)
+        return []
+    with tempfile.TemporaryDirectory(prefix="tactile-aedat4-") as tmp:
+        readable = copy_without_streams(path, set(unknown), Path(tmp) / path.name)
+        _ingest_streams(path, readable, writer, options, progress)
+    return [f"{path}: skipped stream {sid} of type {kind or '(none)'!r} (not readable)"
+            for sid, kind in sorted(unknown.items())]
+
+
+def _event_stream(path: Path, streams: dict[int, StreamInfo],
+                  options: IngestOptions) -> tuple[StreamInfo, int, int]:
+    """The file's one event stream and its sensor size (width, height) in px."""
     event_streams = [s for s in streams.values() if s.type == "events"]
     if not event_streams:
         found = ", ".join(sorted({s.type for s in streams.values()})) or "no streams"
@@ -94,6 +120,10 @@ def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
     if len(event_streams) > 1:
         raise InputError(f"{len(event_streams)} event streams in one file; a trial holds one "
                          "event stream: export each camera to its own file", path=path)
+    frame_streams = [s for s in streams.values() if s.type == "frame"]
+    if len(frame_streams) > 1:
+        raise InputError(f"{len(frame_streams)} frame streams in one file; a trial holds one "
+                         "image stream: export each camera to its own file", path=path)
     stream = event_streams[0]
     if not stream.width_px or not stream.height_px:
         raise InputError(f"event stream {stream.stream_id} does not state its sensor size",
@@ -104,24 +134,83 @@ def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
         if given is not None and given != found:
             raise InputError(f"{flag} {given} disagrees with the file's sensor size "
                              f"{width}x{height} px; omit {flag} for AEDAT4 files", path=path)
+    return stream, width, height
+
+
+def _ingest_streams(path: Path, readable: Path, writer: StoreWriter, options: IngestOptions,
+                    progress: Progress) -> None:
+    """Ingest ``path`` (as named in messages and sources) by decoding ``readable`` (the
+    file itself, or its copy without unknown streams)."""
+    streams = read_streams(readable)
+    stream, width, height = _event_stream(path, streams, options)
     name = options.sensor_name or stream.camera or DEFAULT_SENSOR
     described = f"iniVation {stream.camera}" if stream.camera else "AEDAT4 event camera"
     sensor = event_sensor(writer, name, width_px=width, height_px=height, source=path,
                           description=f"{described}, AEDAT4 event stream {stream.stream_id}")
+    origin_us = _first_event_us(path, readable, stream.stream_id)
     source = writer.add_source(path)
-    events = writer.trial(path.stem, sources=[source]).events(sensor)
+    trial = writer.trial(path.stem, sources=[source])
+    events = trial.events(sensor)
     gather = _Gather(events, path, max(1, options.chunk_events))
-    with open(path, "rb") as raw:
+    frames = {s.stream_id: FrameCollector(trial, _frame_sensor(writer, sensor, s, path), path,
+                                          s.stream_id, origin_us)
+              for s in streams.values() if s.type == "frame"}
+    imus = {s.stream_id: ImuCollector(path, s.stream_id)
+            for s in streams.values() if s.type == "imus"}
+    triggers = TriggerCollector()
+    with open(readable, "rb") as raw:
         sizes = _packet_sizes(raw)
         progress.advance(next(sizes, 0))  # the file header
-        for packet in _packets(path, events_read=gather.seen):
+        for packet in _packets(readable, events_read=gather.seen, path=path):
             progress.advance(next(sizes, 0))
-            if packet.get("stream_id") == stream.stream_id and "events" in packet:
-                gather.add(packet["events"])  # IMU, trigger and frame packets are skipped
+            sid = packet.get("stream_id")
+            if sid == stream.stream_id and "events" in packet:
+                gather.add(packet["events"])
+            elif sid in frames and "frame" in packet:
+                frames[sid].add(packet["frame"])
+            elif sid in imus and "imus" in packet:
+                imus[sid].add(packet["imus"])
+            elif "triggers" in packet:
+                triggers.add(packet["triggers"])
     gather.flush()
     # camera clocks count from an arbitrary epoch: the trial starts at its first event
-    if events.close(t_origin_us=events.t_first) == 0:
+    if events.close(t_origin_us=origin_us) == 0:
         raise InputError(f"event stream {stream.stream_id} holds no events", path=path)
+    for collector in frames.values():
+        collector.close()
+    imu_name = f"{sensor}_imu"
+    for sid, imu in imus.items():
+        suffix = "" if len(imus) == 1 else f"_{sid}"
+        imu.write(writer, trial, stream=f"imu{suffix}", sensor=f"{imu_name}{suffix}",
+                  camera=stream.camera or sensor, origin_us=origin_us)
+    marks = triggers.annotations(origin_us)
+    if marks:
+        trial.set_annotations(marks)
+
+
+def _frame_sensor(writer: StoreWriter, event_sensor_name: str, frames: StreamInfo,
+                  path: Path) -> str:
+    """The sensor of the APS frames: the event sensor when the sizes agree (DAVIS),
+    else an event-camera sensor ``<camera>_aps`` of the frames' size."""
+    attrs = writer.h5["sensors"][event_sensor_name].attrs
+    size = (frames.width_px, frames.height_px)
+    if size == (int(attrs["width_px"]), int(attrs["height_px"])):
+        return event_sensor_name
+    if not all(size):
+        raise InputError(f"frame stream {frames.stream_id} does not state its size", path=path)
+    return event_sensor(writer, f"{event_sensor_name}_aps", width_px=int(size[0]),
+                        height_px=int(size[1]), source=path,
+                        description=f"APS frames of {event_sensor_name} "
+                        f"(AEDAT4 frame stream {frames.stream_id})")
+
+
+def _first_event_us(path: Path, readable: Path, stream_id: int) -> int:
+    """The first event's timestamp (the trial's time 0), decoded ahead of the main pass so
+    frames, IMU samples and triggers recorded before it get their times as they stream."""
+    for packet in _packets(readable, events_read=lambda: 0, path=path):
+        if packet.get("stream_id") == stream_id and len(packet.get("events", ())):
+            return int(packet["events"]["t"][0])
+    raise InputError(f"event stream {stream_id} holds no events", path=path)
 
 
 class _Gather:
@@ -187,19 +276,24 @@ def _stderr_to_nothing() -> Iterator[None]:
         os.close(saved)
 
 
-def _open(path: Path) -> Any:
+def _open(readable: Path, path: Path | None = None) -> Any:
+    """A decoder of ``readable``; its refusal is an InputError naming ``path``."""
+    path = readable if path is None else path
     try:
         with _stderr_to_nothing():
-            return aedat.Decoder(path)
+            return aedat.Decoder(readable)
     except BaseException as exc:
         if not _decoder_error(exc):
             raise
         raise InputError(f"not a readable AEDAT4 file ({_one_line(exc)})", path=path) from None
 
 
-def _packets(path: Path, *, events_read: Callable[[], int]) -> Iterator[dict[str, Any]]:
-    """The decoder's packets; a decoding error becomes an InputError naming the file."""
-    decoder = _open(path)
+def _packets(readable: Path, *, events_read: Callable[[], int],
+             path: Path | None = None) -> Iterator[dict[str, Any]]:
+    """The decoder's packets of ``readable``; a decoding error becomes an InputError naming
+    ``path`` (default ``readable``)."""
+    path = readable if path is None else path
+    decoder = _open(readable, path)
     while True:
         try:
             packet = next(decoder)

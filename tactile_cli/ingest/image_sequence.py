@@ -7,6 +7,9 @@ Layout read (one folder = one trial, trial name = folder name)::
         frame_1.png ... frame_240.png
         timestamps.csv         optional frame times
 
+An input folder without frames whose subfolders are such folders (``digit/press_01/``,
+``digit/press_02/``, ...) is ingested as one trial per subfolder, in natural name order.
+
 - **Frames**: every ``.png``/``.jpg``/``.jpeg`` file directly in the folder except the
   reference, in natural name order (``frame_2`` before ``frame_10``). Hidden files
   (``.*``, e.g. macOS ``._frame1.png``) and subfolders are not read. BMP/TIFF/GIF/WebP
@@ -23,8 +26,8 @@ Layout read (one folder = one trial, trial name = folder name)::
   the trial attribute ``time_origin_unix_s`` (as the mapped-CSV ingest does). Times must be
   finite and must not decrease in frame order. Without the file, frames are taken to be
   evenly spaced at :data:`DEFAULT_FRAME_RATE_HZ` = 30 Hz, the rate DIGIT streams at
-  (paper 002, sec. III: "DIGIT runs at 30Hz"), and the trial records the assumption in
-  its attribute ``frame_rate_assumed_hz``.
+  (paper 002, sec. III: "DIGIT runs at 30Hz"), the trial records the assumption in
+  its attribute ``frame_rate_assumed_hz``, and the ingest returns a note saying so.
 - **Pixels**: stored as (height, width, 3) uint8 RGB. Grayscale (``L``, ``1``) frames are
   replicated to three channels, alpha (``RGBA``, ``LA``, palette transparency) is dropped
   without compositing, palette/CMYK/YCbCr frames are converted by Pillow. 16-bit and
@@ -40,8 +43,6 @@ order, then its reference, then its ``timestamps.csv`` if any).
 
 from __future__ import annotations
 
-import csv
-import io
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -55,6 +56,7 @@ from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter
 from . import IMAGE_SUFFIXES, IngestOptions
+from .csv_records import csv_records
 
 #: Frame rate assumed when a folder has no timestamps.csv: DIGIT's 30 Hz (paper 002).
 DEFAULT_FRAME_RATE_HZ = 30.0
@@ -101,6 +103,33 @@ def natural_key(name: str) -> tuple[tuple[str | int, ...], str]:
     parts = _DIGITS.split(name.casefold())
     # re.split with one group alternates text (even) and digits (odd), so types line up
     return tuple(int(p) if i % 2 else p for i, p in enumerate(parts)), name
+
+
+def has_image_files(folder: Path) -> bool:
+    """Whether ``folder`` holds PNG/JPG files directly (hidden files not counted)."""
+    return any(p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
+               for p in folder.iterdir())
+
+
+def image_sequence_folders(folder: Path) -> list[Path]:
+    """The trial folders an input folder stands for: itself when it holds frames, else its
+    subfolders (in natural name order) when they are image-sequence folders, else none.
+
+    A folder of image-sequence folders (``digit/press_01/``, ``digit/press_02/``, ...) is
+    ingested as one trial per subfolder. A subfolder without frames beside ones with
+    frames is an InputError naming it, rather than a trial skipped without a word.
+    """
+    if has_image_files(folder):
+        return [folder]
+    subfolders = sorted((p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")),
+                        key=lambda p: natural_key(p.name))
+    with_frames = [p for p in subfolders if has_image_files(p)]
+    without = [p for p in subfolders if p not in with_frames]
+    if with_frames and without:
+        raise InputError(f"holds image-sequence folders ({with_frames[0].name}, ...) and "
+                         f"{without[0].name}/, which has no PNG/JPG frames; move it out, or pass "
+                         "the sequence folders themselves", path=folder)
+    return with_frames
 
 
 def scan_image_folder(
@@ -199,15 +228,10 @@ def read_timestamps(path: Path, frames: Sequence[Path]) -> FrameTimes:
     ``t_unix_s`` (``file,t_unix_s``); blank lines are skipped.
     """
     rows: list[tuple[int, list[str]]] = []
-    reader = csv.reader(io.StringIO(read_text(path, "timestamps file"), newline=""), strict=True)
-    try:
-        for row in reader:
-            cells = [c.strip() for c in row]
-            if any(cells):
-                rows.append((reader.line_num, cells))
-    except csv.Error as exc:
-        raise InputError(f"not valid CSV ({exc})", path=path,
-                         where=f"line {reader.line_num}") from None
+    for line_no, row in csv_records(read_text(path, "timestamps file"), path):
+        cells = [c.strip() for c in row]
+        if any(cells):
+            rows.append((line_no, cells))
     if not rows:
         raise InputError("is empty; write one time in seconds per frame (column t_s)", path=path)
     header = [c.lower() for c in rows[0][1]]
@@ -311,14 +335,20 @@ def nominal_frame_rate_hz(folders: Sequence[ImageFolder]) -> float:
 
 
 def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                          progress: Progress) -> None:
+                          progress: Progress) -> list[str]:
     """Add one visuotactile sensor and one trial per input folder to ``writer``.
 
     The sensor is named ``options.sensor_name`` (default ``visuotactile``); its size
     comes from the frames and must match ``options.width_px``/``height_px`` when given.
-    Progress counts frames.
+    An input folder that holds image-sequence folders rather than frames stands for them
+    (:func:`image_sequence_folders`). Progress counts frames. Returns the notes for the
+    user: one line when frame times were assumed (folders without ``timestamps.csv`` and no
+    ``frame_rate_hz``), naming the rate and how to give the real one.
     """
-    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz) for p in inputs]
+    # a folder with neither frames nor sequence folders is scanned as it is, for its error
+    trial_folders = [f for p in inputs for f in ((image_sequence_folders(p) or [p])
+                                                 if p.is_dir() else [p])]
+    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz) for p in trial_folders]
     first_ref = folders[0].reference
     reference0 = load_rgb(first_ref)
     size_hw = (int(reference0.shape[0]), int(reference0.shape[1]))
@@ -336,6 +366,26 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
     for folder in folders:
         _write_trial(folder, writer, sensor, size_hw, first_ref, progress)
     progress.finish()
+    return assumed_rate_notes(folders)
+
+
+def assumed_rate_notes(folders: Sequence[ImageFolder]) -> list[str]:
+    """One note naming the folders whose frame times were assumed evenly spaced, the rate
+    assumed and how to give the real one (empty list when no time was assumed)."""
+    assumed = [f for f in folders if f.frame_rate_assumed_hz is not None]
+    if not assumed:
+        return []
+    rate = assumed[0].frame_rate_assumed_hz
+    if len(assumed) == 1:
+        who, where = f"{assumed[0].trial_name} has", "the folder"
+    else:
+        more = f" and {len(assumed) - 3} more" if len(assumed) > 3 else ""
+        names = ", ".join(f.trial_name for f in assumed[:3]) + more
+        who, where = f"{len(assumed)} folders ({names}) have", "each folder"
+    return [f"{who} no {TIMESTAMPS_FILE}: frames taken as evenly spaced at {rate:g} Hz "
+            "(DIGIT's rate; recorded as the trial attribute frame_rate_assumed_hz); give the "
+            f"real rate with `frame_rate_hz=HZ`, or a {TIMESTAMPS_FILE} (t_s per frame) in "
+            f"{where}"]
 
 
 def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw: tuple[int, int],
@@ -375,6 +425,9 @@ def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw:
 __all__ = [
     "DEFAULT_FRAME_RATE_HZ",
     "FrameTimes",
+    "assumed_rate_notes",
+    "has_image_files",
+    "image_sequence_folders",
     "REFERENCE_STEMS",
     "TIMESTAMPS_FILE",
     "ImageFolder",

@@ -9,8 +9,9 @@ and sensor kinds. The ingest runs in two passes:
    so a typo in the mapping fails in a second, naming the file and the mapping key.
 2. **Read and write**: per trial, parse each file once (pandas C engine with explicit
    settings, after a vectorised check that every row has exactly the header's field count,
-   so a short row is an error with its line number, never NaN-filled), build the time bases,
-   and write one signal stream per mapping stream.
+   so a short row is an error with its line number, never NaN-filled; a file with quote
+   characters is split by the csv module instead, honouring standard CSV quoting), build
+   the time bases, and write one signal stream per mapping stream.
 
 Time bases are seconds from the trial's first sample: the earliest first time of the
 trial's column-timed streams (one clock); evenly spaced streams start at 0. Epoch time
@@ -26,9 +27,10 @@ import csv
 import fnmatch
 import io
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -38,7 +40,16 @@ from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter, safe_name
 from . import IngestOptions
-from .mapping import STEM_FIELD, CsvDialect, CsvMapping, Stream, load_mapping, render
+from .csv_records import QUOTE_BYTE, csv_records, first_record, record_cells
+from .mapping import (
+    ROW_FIELD,
+    STEM_FIELD,
+    CsvDialect,
+    CsvMapping,
+    Stream,
+    load_mapping,
+    render,
+)
 
 #: Text values parsed as NaN (then refused as non-finite, with their line and column).
 NAN_TOKENS = ("nan", "NaN", "NAN", "-nan", "-NaN", "-NAN")
@@ -46,6 +57,10 @@ NAN_TOKENS = ("nan", "NaN", "NAN", "-nan", "-NaN", "-NAN")
 MAX_NAMES_SHOWN = 12
 
 _DIGITS = re.compile(r"([0-9]+)")
+#: Key of a ``layout: rows`` table in a trial's files (no stream template is empty).
+TABLE = ""
+#: Nominal rate of one-sample streams (``rows_are: trials``): the schema wants a rate > 0.
+ROW_RATE_HZ = 1.0
 
 
 # -- CSV tables -------------------------------------------------------------------------------
@@ -54,7 +69,9 @@ class CsvTable:
     """Columns of one parsed CSV file.
 
     columns: name -> (n_rows,) float64 (numeric columns, all finite) or object (text);
-    first_data_line: 1-based line number of data row 0 in the file.
+    first_data_line: 1-based line number of data row 0 in the file; row_lines: (n_rows,)
+    1-based line each data row starts on when the file uses quoting (a quoted field may
+    span lines), else None (data row i is on line ``first_data_line + i``).
     """
 
     path: Path
@@ -62,30 +79,39 @@ class CsvTable:
     columns: dict[str, np.ndarray]
     n_rows: int
     first_data_line: int
+    row_lines: np.ndarray | None = None
 
     def line(self, row: int) -> int:
-        """1-based file line of data row ``row``."""
+        """1-based file line of data row ``row`` (where it starts)."""
+        if self.row_lines is not None:
+            return int(self.row_lines[row])
         return self.first_data_line + int(row)
 
 
 def read_csv_header(path: Path, dialect: CsvDialect) -> list[str]:
-    """The column names of a CSV file: its first line, or ``dialect.column_names``."""
+    """The column names of a CSV file: its first record, or ``dialect.column_names``."""
     if not dialect.header:
         return list(dialect.column_names or [])
     try:
         with open(path, "rb") as f:
-            first = f.readline()
+            first = first_record(f)
     except OSError as exc:
         raise os_error(exc, path, "CSV file") from None
     return _header_names(first, path, dialect)
 
 
 def _header_names(first: bytes, path: Path, dialect: CsvDialect) -> list[str]:
-    text = decode_utf8(first, path).rstrip("\r\n")
-    if not text.strip():
+    """The checked column names of a header record given as bytes."""
+    return _checked_names(record_cells(first, path, delimiter=dialect.delimiter), path, dialect)
+
+
+def _checked_names(cells: list[str], path: Path, dialect: CsvDialect) -> list[str]:
+    """Header cells as column names: none empty, none repeated (a trailing delimiter's
+    empty last cell dropped)."""
+    if len(cells) <= 1 and not "".join(cells).strip():
         raise InputError("the header line is empty (set `header: false` and `column_names` "
                          "in the mapping if the file has no header)", path=path, where="line 1")
-    names = [n.strip() for n in text.split(dialect.delimiter)]
+    names = [n.strip() for n in cells]
     if dialect.trailing_delimiter and len(names) > 1 and names[-1] == "":
         names.pop()
     if "" in names:
@@ -123,6 +149,9 @@ def read_csv_table(
     with ``trailing_delimiter``); blank lines are allowed only at the end of the file, NUL
     bytes nowhere. final_newline: the last line must end with a line break (for files that a
     program wrote, where a last line without one is a row cut short).
+    Standard CSV quoting is honoured (a quoted field may hold the delimiter, doubled quotes
+    and line breaks): a file without any quote character takes the vectorised path, one with
+    quotes is split by the csv module (:mod:`tactile_cli.ingest.csv_records`).
     Raises :class:`InputError` naming the file, line and column.
     """
     raw = read_bytes(path, "CSV file")
@@ -142,100 +171,195 @@ def read_csv_table(
         raise InputError("the last line does not end with a line break: the file looks cut "
                          "short; if the line is complete, end the file with a newline",
                          path=path, where=f"line {len(starts)}")
-    n_lines = int(nonblank[-1]) + 1  # trailing blank lines are dropped
-    starts, ends = starts[:n_lines], ends[:n_lines]
+    wanted = list(dict.fromkeys([*numeric, *text]))
+    if np.any(buf == QUOTE_BYTE):
+        table = _read_quoted(raw, path, dialect, wanted, set(numeric))
+    else:
+        n_lines = int(nonblank[-1]) + 1  # trailing blank lines are dropped
+        table = _read_plain(raw, buf, starts[:n_lines], ends[:n_lines], path, dialect, wanted,
+                            set(numeric))
+    for c in numeric:
+        values = table.columns[c]
+        notfinite = np.flatnonzero(~np.isfinite(values))
+        if len(notfinite):
+            i = int(notfinite[0])
+            raise InputError(f"column {c!r} holds {values[i]} (values must be finite; leave the "
+                             "column out of the mapping if it is not measured)",
+                             path=path, where=f"line {table.line(i)}, column {c!r}")
+    return table
+
+
+def _read_plain(raw: bytes, buf: np.ndarray, starts: np.ndarray, ends: np.ndarray, path: Path,
+                dialect: CsvDialect, wanted: list[str], numeric: set[str]) -> CsvTable:
+    """The fast path for files without quotes: fields counted per line with numpy, then
+    parsed by pandas' C engine. starts, ends: byte bounds of the lines up to the last
+    non-blank one."""
     if dialect.header:
         names = _header_names(raw[starts[0]:ends[0]], path, dialect)
         skip = 1
     else:
         names = list(dialect.column_names or [])
         skip = 0
-    wanted = list(dict.fromkeys([*numeric, *text]))
-    missing = [c for c in wanted if c not in names]
-    if missing:
-        raise InputError(f"column {missing[0]!r} is not in the file (columns: "
-                         f"{_shown(names)})", path=path, where="line 1" if dialect.header else None)
+    _check_wanted(names, wanted, path, dialect)
     d_starts, d_ends = starts[skip:], ends[skip:]
     n_rows = len(d_starts)
     if n_rows == 0:
         raise InputError("the file has a header but no data rows", path=path)
     blank = np.flatnonzero(d_ends == d_starts)
     if len(blank):
-        raise InputError("blank line inside the data (only the end of a file may be blank)",
-                         path=path, where=f"line {skip + int(blank[0]) + 1}")
+        raise _blank_line_error(path, skip + int(blank[0]) + 1)
     delim = ord(dialect.delimiter)
     dpos = np.flatnonzero(buf[: ends[-1]] == delim)
     fields = np.searchsorted(dpos, d_ends) - np.searchsorted(dpos, d_starts) + 1
-    expected = len(names) + int(dialect.trailing_delimiter)
-    bad = np.flatnonzero(fields != expected)
+    bad = np.flatnonzero(fields != len(names) + int(dialect.trailing_delimiter))
     if len(bad):
         i = int(bad[0])
-        got = int(fields[i]) - int(dialect.trailing_delimiter)
-        hint = ""
-        if got == len(names) + 1 and not dialect.trailing_delimiter:
-            hint = "; if every row ends with the delimiter, set `trailing_delimiter: true`"
-        elif got < len(names):
-            hint = " (a short or cut-off row)"
-        raise InputError(f"row has {got} fields, expected {len(names)} like the "
-                         f"{'header' if dialect.header else '`column_names`'}{hint}",
-                         path=path, where=f"line {skip + i + 1}")
+        raise _field_count_error(int(fields[i]), names, dialect, path, skip + i + 1)
     if dialect.trailing_delimiter:
         no_trail = np.flatnonzero(buf[d_ends - 1] != delim)
         if len(no_trail):
-            raise InputError("row does not end with the delimiter (`trailing_delimiter: true`): "
-                             "a field is missing inside it", path=path,
-                             where=f"line {skip + int(no_trail[0]) + 1}")
-    index = {n: i for i, n in enumerate(names)}
-    numeric_set = set(numeric)
-    dtypes = {index[c]: (np.float64 if c in numeric_set else object) for c in wanted}
+            raise _no_trailing_delimiter_error(path, skip + int(no_trail[0]) + 1)
     body = io.BytesIO(raw[d_starts[0]: ends[-1]])
-    read_kwargs = dict(sep=dialect.delimiter, header=None, usecols=sorted(dtypes), engine="c",
-                       keep_default_na=False, quoting=csv.QUOTE_NONE, on_bad_lines="error",
-                       encoding="utf-8-sig" if skip == 0 else "utf-8", skip_blank_lines=False)
+    columns = _parse_columns(body, path, dialect, names, wanted, numeric, n_rows,
+                             lambda row: skip + row + 1, quoted=False,
+                             encoding="utf-8-sig" if skip == 0 else "utf-8")
+    return CsvTable(path=path, names=tuple(names), columns=columns, n_rows=n_rows,
+                    first_data_line=skip + 1)
+
+
+def _read_quoted(raw: bytes, path: Path, dialect: CsvDialect, wanted: list[str],
+                 numeric: set[str]) -> CsvTable:
+    """The path for files with quote characters: records split by the csv module (a record
+    may span lines) for the same checks as the fast path, by the line a record starts on;
+    then the values parsed by pandas' C engine with quoting."""
+    text = decode_utf8(raw, path)  # drops a byte order mark
+    header: list[str] | None = None
+    lines: list[int] = []  # where each data record starts
+    fields: list[int] = []
+    filled_last: list[bool] = []  # the last field is not empty
+    for line, cells in csv_records(text, path, delimiter=dialect.delimiter):
+        if dialect.header and header is None:
+            header = cells
+            continue
+        lines.append(line)
+        fields.append(len(cells))
+        filled_last.append(bool(cells) and cells[-1] != "")
+    while fields and fields[-1] == 0:  # trailing blank lines are dropped
+        lines.pop(), fields.pop(), filled_last.pop()
+    names = (_checked_names(header or [], path, dialect) if dialect.header
+             else list(dialect.column_names or []))
+    _check_wanted(names, wanted, path, dialect)
+    if not fields:
+        raise InputError("the file has a header but no data rows", path=path)
+    row_lines = np.array(lines, dtype=np.int64)
+    counts = np.array(fields, dtype=np.int64)
+    blank = np.flatnonzero(counts == 0)
+    if len(blank):
+        raise _blank_line_error(path, int(row_lines[blank[0]]))
+    bad = np.flatnonzero(counts != len(names) + int(dialect.trailing_delimiter))
+    if len(bad):
+        i = int(bad[0])
+        raise _field_count_error(int(counts[i]), names, dialect, path, int(row_lines[i]))
+    if dialect.trailing_delimiter and any(filled_last):
+        raise _no_trailing_delimiter_error(path, lines[filled_last.index(True)])
+    start = 0
+    for _ in range(lines[0] - 1):  # the data start after the header's lines
+        start = text.index("\n", start) + 1
+    body = io.StringIO(text[start:].rstrip("\r\n") + "\n", newline="")
+    columns = _parse_columns(body, path, dialect, names, wanted, numeric, len(lines),
+                             lambda row: lines[row], quoted=True)
+    return CsvTable(path=path, names=tuple(names), columns=columns, n_rows=len(lines),
+                    first_data_line=lines[0], row_lines=row_lines)
+
+
+def _parse_columns(body: io.BytesIO | io.StringIO, path: Path, dialect: CsvDialect,
+                   names: list[str], wanted: list[str], numeric: set[str], n_rows: int,
+                   line_of: Callable[[int], int], *, quoted: bool,
+                   encoding: str | None = None) -> dict[str, np.ndarray]:
+    """The wanted columns of the data rows in ``body`` (rows already checked for their field
+    count), parsed by pandas' C engine: numeric ones as float64, the rest as text.
+    line_of: file line of data row i, for the error at a cell that is not a number."""
+    index = {n: i for i, n in enumerate(names)}
+    dtypes = {index[c]: (np.float64 if c in numeric else object) for c in wanted}
+    read_kwargs: dict[str, Any] = dict(
+        sep=dialect.delimiter, header=None, usecols=sorted(dtypes), engine="c",
+        keep_default_na=False, quoting=csv.QUOTE_MINIMAL if quoted else csv.QUOTE_NONE,
+        on_bad_lines="error", skip_blank_lines=False)
+    if encoding is not None:
+        read_kwargs["encoding"] = encoding
     try:
         frame = pd.read_csv(body, dtype=dtypes, na_values=list(NAN_TOKENS), **read_kwargs)
     except ValueError as exc:
         body.seek(0)
         _locate_bad_number(pd.read_csv(body, dtype=object, na_filter=False, **read_kwargs),
-                           [c for c in wanted if c in numeric_set], index, path, skip, exc)
+                           [c for c in wanted if c in numeric], index, path, line_of, exc)
         raise  # _locate_bad_number always raises
-    if len(frame) != n_rows:  # the checks above make this impossible; keep the reader honest
+    if len(frame) != n_rows:  # the checks before make this impossible; keep the reader honest
         raise InputError(f"parsed {len(frame)} rows but the file has {n_rows}", path=path)
-    columns: dict[str, np.ndarray] = {}
-    for c in wanted:
-        values = frame[index[c]].to_numpy()
-        if c in numeric_set:
-            values = values.astype(np.float64, copy=False)
-            notfinite = np.flatnonzero(~np.isfinite(values))
-            if len(notfinite):
-                i = int(notfinite[0])
-                raise InputError(f"column {c!r} holds {values[i]} (values must be finite; "
-                                 "leave the column out of the mapping if it is not measured)",
-                                 path=path, where=f"line {skip + i + 1}, column {c!r}")
-        else:
-            values = values.astype(object, copy=False)
-        columns[c] = values
-    return CsvTable(path=path, names=tuple(names), columns=columns, n_rows=n_rows,
-                    first_data_line=skip + 1)
+    return {c: frame[index[c]].to_numpy().astype(np.float64 if c in numeric else object,
+                                                 copy=False) for c in wanted}
+
+
+def _check_wanted(names: list[str], wanted: list[str], path: Path, dialect: CsvDialect) -> None:
+    missing = [c for c in wanted if c not in names]
+    if missing:
+        raise InputError(f"column {missing[0]!r} is not in the file (columns: "
+                         f"{_shown(names)})", path=path, where="line 1" if dialect.header else None)
+
+
+def _blank_line_error(path: Path, line: int) -> InputError:
+    return InputError("blank line inside the data (only the end of a file may be blank)",
+                      path=path, where=f"line {line}")
+
+
+def _field_count_error(fields: int, names: list[str], dialect: CsvDialect, path: Path,
+                       line: int) -> InputError:
+    """The error for a row of ``fields`` fields (a trailing delimiter's field included)."""
+    got = fields - int(dialect.trailing_delimiter)
+    hint = ""
+    if got == len(names) + 1 and not dialect.trailing_delimiter:
+        hint = "; if every row ends with the delimiter, set `trailing_delimiter: true`"
+    elif got < len(names):
+        hint = " (a short or cut-off row)"
+    return InputError(f"row has {got} fields, expected {len(names)} like the "
+                      f"{'header' if dialect.header else '`column_names`'}{hint}",
+                      path=path, where=f"line {line}")
+
+
+def _no_trailing_delimiter_error(path: Path, line: int) -> InputError:
+    return InputError("row does not end with the delimiter (`trailing_delimiter: true`): a "
+                      "field is missing inside it", path=path, where=f"line {line}")
+
+
+def _to_float(cells: np.ndarray) -> tuple[np.ndarray, int | None]:
+    """(n,) text cells as float64 (NaN tokens as NaN) and the index of the first cell that
+    is not a number (None when all are)."""
+    text = cells.astype(str)
+    values = pd.to_numeric(pd.Series(text), errors="coerce").to_numpy(dtype=np.float64)
+    bad = np.flatnonzero(np.isnan(values) & ~np.isin(text, NAN_TOKENS))
+    return values, (int(bad[0]) if len(bad) else None)
+
+
+def _bad_number_error(column: str, cell: str, path: Path, line: int) -> InputError:
+    what = ("an empty field (a missing value or a stray delimiter)" if cell.strip() == ""
+            else f"{cell!r}, which is not a number")
+    return InputError(f"column {column!r} holds {what}", path=path,
+                      where=f"line {line}, column {column!r}")
 
 
 def _locate_bad_number(frame: pd.DataFrame, numeric: list[str], index: dict[str, int], path: Path,
-                       skip: int, exc: Exception) -> None:
+                       line_of: Callable[[int], int], exc: Exception) -> None:
     """Raise an InputError at the first numeric-column cell that is not a number."""
     first: tuple[int, str, str] | None = None
     for c in numeric:
-        cells = frame[index[c]].to_numpy(dtype=object).astype(str)
-        parsed = pd.to_numeric(pd.Series(cells), errors="coerce").to_numpy(dtype=np.float64)
-        bad = np.flatnonzero(np.isnan(parsed) & ~np.isin(cells, NAN_TOKENS))
-        if len(bad) and (first is None or bad[0] < first[0]):
-            first = (int(bad[0]), c, str(cells[bad[0]]))
+        cells = frame[index[c]].to_numpy(dtype=object)
+        _, bad = _to_float(cells)
+        if bad is not None and (first is None or bad < first[0]):
+            first = (bad, c, str(cells[bad]))
     if first is None:
         raise InputError(f"cannot parse the file ({exc})", path=path) from None
     row, c, cell = first
-    what = ("an empty field (a missing value or a stray delimiter)" if cell.strip() == ""
-            else f"{cell!r}, which is not a number")
-    raise InputError(f"column {c!r} holds {what}",
-                     path=path, where=f"line {skip + row + 1}, column {c!r}") from None
+    raise _bad_number_error(c, cell, path, line_of(row)) from None
 
 
 def _shown(names: Sequence[str]) -> str:
@@ -276,15 +400,17 @@ def plan_trials(inputs: Sequence[Path], mapping: CsvMapping, mapping_path: Path)
                 raise InputError(f"this trial is found twice (also from input {seen[key]}); "
                                  "give inputs that do not overlap", path=found)
             seen[key] = inp
-            fields = {STEM_FIELD: found.stem if layout.layout == "file" else found.name}
+            fields = {STEM_FIELD: found.name if layout.layout == "folder" else found.stem}
             if rx is not None:
                 m = rx.search(found.as_posix())
                 if m is None:
                     raise InputError(f"the trial path does not match `trials.pattern` "
                                      f"{layout.pattern!r} in {mapping_path}", path=found)
                 fields.update({k: v or "" for k, v in m.groupdict().items()})
-            folder = found.parent if layout.layout == "file" else found
-            name = render(layout.name, fields) if layout.name else fields[STEM_FIELD]
+            folder = found if layout.layout == "folder" else found.parent
+            per_row = layout.row_trials  # names come per row (see _write_row_trials)
+            name = (render(layout.name, fields) if layout.name and not per_row
+                    else fields[STEM_FIELD])
             labels: dict[str, str | int | float] = {**layout.labels}
             labels.update({k: v for k, v in fields.items() if k != STEM_FIELD})
             files = {}
@@ -296,6 +422,8 @@ def plan_trials(inputs: Sequence[Path], mapping: CsvMapping, mapping_path: Path)
                                          f"`streams.{s.name}.{key}` {template!r} in "
                                          f"{mapping_path})", path=path)
                     files[template] = path
+            if layout.layout == "rows":
+                files[TABLE] = found  # the table itself: its label and group columns
             plans.append(TrialPlan(name=name, path=found, labels=labels, files=files))
     if not plans:
         raise InputError("no trials found", path=inputs[0] if inputs else None)
@@ -305,7 +433,7 @@ def plan_trials(inputs: Sequence[Path], mapping: CsvMapping, mapping_path: Path)
 
 def _find_trial_paths(inp: Path, mapping: CsvMapping) -> list[Path]:
     layout = mapping.trials
-    if layout.layout == "file":
+    if layout.layout in ("file", "rows"):
         if inp.is_file():
             return [inp]
         found = sorted((p for p in inp.glob(layout.glob) if p.is_file()), key=natural_key)
@@ -372,13 +500,17 @@ def _check_columns(plans: list[TrialPlan], mapping: CsvMapping, mapping_path: Pa
                                  "need the same channels", path=plan.files[s.file])
             first_channels.setdefault(s.name, (chosen, plan.files[s.file]))
             plan.channels[s.name] = chosen
-            if s.time.column is not None:
+            if s.time is not None and s.time.column is not None:
                 need(plan, s.time.file or s.file, s.time.column, f"{key}.time.column")
-            if s.time.rate_from is not None:
+            if s.time is not None and s.time.rate_from is not None:
                 need(plan, s.time.rate_from.file, s.time.rate_from.column,
                      f"{key}.time.rate_from.column")
             for lab in s.sample_labels:
                 need(plan, lab.file or s.file, lab.column, f"{key}.sample_labels.{lab.name}.column")
+        for column in mapping.trials.label_columns:
+            need(plan, TABLE, column, "trials.label_columns")
+        if mapping.trials.group is not None:
+            need(plan, TABLE, mapping.trials.group, "trials.group")
 
 
 def _check_stream_shape(s: Stream, chosen: list[str], mapping_path: Path, path: Path) -> None:
@@ -442,9 +574,13 @@ def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
         timed = [d.t_raw_s[0] for d in streams.values() if d.t_raw_s is not None]
         origin = float(min(timed)) if timed else 0.0
         extra = {}
-        if timed and any(s.time.epoch for s in mapping.streams):
+        if timed and any(s.time is not None and s.time.epoch for s in mapping.streams):
             extra["time_origin_unix_s"] = origin
-        trial = writer.trial(plan.name, labels=plan.labels, sources=sources, **extra)
+        if mapping.trials.row_trials:
+            _write_row_trials(writer, plan, mapping, tables, streams, sources)
+            continue
+        labels = {**plan.labels, **_table_labels(plan, mapping, tables)}
+        trial = writer.trial(plan.name, labels=labels, sources=sources, **extra)
         for s in mapping.streams:
             d = streams[s.name]
             t_s = d.t_raw_s - origin if d.t_raw_s is not None else d.t_s
@@ -454,10 +590,15 @@ def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
             rates[s.name].append(d.rate_hz)
     for s in mapping.streams:
         names = output_channels(s, plans[0].channels[s.name])
-        writer.add_sensor(s.sensor_name, kind=s.kind,
-                          sample_rate_hz=float(np.median(rates[s.name])), channel_names=names,
+        rate_hz = float(np.median(rates[s.name])) if rates[s.name] else ROW_RATE_HZ
+        description = s.description
+        if mapping.trials.row_trials:
+            description = (f"{description}; " if description else "") + \
+                "one sample per trial (a table row); sample_rate_hz is nominal"
+        writer.add_sensor(s.sensor_name, kind=s.kind, sample_rate_hz=rate_hz,
+                          channel_names=names,
                           channel_units=[unit_of(s, n, mapping_path) for n in names],
-                          description=s.description)
+                          description=description)
     progress.finish()
 
 
@@ -467,18 +608,26 @@ def _read_tables(plan: TrialPlan, mapping: CsvMapping, progress: Progress) -> di
     text: dict[str, list[str]] = {t: [] for t in plan.files}
     for s in mapping.streams:
         numeric[s.file] += plan.channels[s.name]
-        if s.time.column is not None:
+        if s.time is not None and s.time.column is not None:
             numeric[s.time.file or s.file].append(s.time.column)
-        if s.time.rate_from is not None:
+        if s.time is not None and s.time.rate_from is not None:
             numeric[s.time.rate_from.file].append(s.time.rate_from.column)
         for lab in s.sample_labels:
             (text if lab.classes is not None else numeric)[lab.file or s.file].append(lab.column)
+    if TABLE in plan.files:
+        text[TABLE] += mapping.trials.label_column_names
+    # columns per file: two templates (a stream's file and the rows table) may name one file
+    num_of: dict[Path, list[str]] = {}
+    txt_of: dict[Path, list[str]] = {}
+    for template, path in plan.files.items():
+        num_of.setdefault(path, []).extend(numeric[template])
+        txt_of.setdefault(path, []).extend(text[template])
     tables: dict[str, CsvTable] = {}
     by_path: dict[Path, CsvTable] = {}
     for template, path in plan.files.items():
         if path not in by_path:
-            num = list(dict.fromkeys(numeric[template]))
-            txt = [c for c in dict.fromkeys(text[template]) if c not in num]
+            num = list(dict.fromkeys(num_of[path]))
+            txt = [c for c in dict.fromkeys(txt_of[path]) if c not in num]
             by_path[path] = read_csv_table(path, mapping.dialect(template), numeric=num, text=txt)
             progress.advance(1)
         tables[template] = by_path[path]
@@ -490,7 +639,7 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
     table = tables[s.file]
     n = table.n_rows
     joined = [table]
-    if s.time.column is not None and s.time.file is not None:
+    if s.time is not None and s.time.column is not None and s.time.file is not None:
         joined.append(tables[s.time.file])
     joined += [tables[lab.file] for lab in s.sample_labels if lab.file is not None]
     if len({t.n_rows for t in joined}) > 1:
@@ -500,6 +649,11 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
                          f"{s.name!r} differ in row count ({counts}); they must have one row "
                          "per sample", path=plan.path)
     data = np.column_stack([table.columns[c] for c in plan.channels[s.name]])
+    if s.time is None:  # rows_are: trials: row i is the one sample of its own trial, at 0 s
+        labels = {lab.name: _label_values(lab.classes, tables[lab.file or s.file], lab.column)
+                  for lab in s.sample_labels}
+        return _StreamData(data=data, t_raw_s=None, t_s=np.zeros(n), rate_hz=ROW_RATE_HZ,
+                           labels=labels)
     rate_hz = s.time.sample_rate_hz
     if s.time.rate_from is not None:
         rate_hz = _value_from(tables[s.time.rate_from.file], s.time.rate_from.column)
@@ -535,6 +689,72 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
         labels = {k: (np.repeat(v, m), c) for k, (v, c) in labels.items()}
         rate_hz = rate_hz * m
     return _StreamData(data=data, t_raw_s=t_raw, t_s=t_even, rate_hz=float(rate_hz), labels=labels)
+
+
+def _write_row_trials(writer: StoreWriter, plan: TrialPlan, mapping: CsvMapping,
+                      tables: dict[str, CsvTable], streams: dict[str, _StreamData],
+                      sources: list[int]) -> None:
+    """``rows_are: trials``: one trial per table row, each stream one sample at t = 0 s,
+    the row's label and group columns as trial labels. Names come from ``trials.name``
+    (fields ``{row}``, the label columns, the regex groups, ``{stem}``), by default
+    ``<stem>_<row>``."""
+    table = tables[TABLE]
+    columns = {c: [_label_value(v, c, table, i) for i, v in enumerate(table.columns[c])]
+               for c in mapping.trials.label_column_names}
+    template = mapping.trials.name or f"{{{STEM_FIELD}}}_{{{ROW_FIELD}}}"
+    base = {k: str(v) for k, v in plan.labels.items()}
+    base[STEM_FIELD] = plan.path.stem
+    for i in range(table.n_rows):
+        row_labels = {c: values[i] for c, values in columns.items()}
+        fields = {**base, **{c: str(v) for c, v in row_labels.items()}, ROW_FIELD: str(i + 1)}
+        trial = writer.trial(render(template, fields), labels={**plan.labels, **row_labels},
+                             sources=sources, table_row=i + 1)
+        for s in mapping.streams:
+            d = streams[s.name]
+            labels = {k: (v[i:i + 1], c) for k, (v, c) in d.labels.items()}
+            trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data[i:i + 1],
+                               t_s=np.zeros(1), sample_labels=labels)
+
+
+def _label_value(cell: object, column: str, table: CsvTable, row: int) -> str | int | float:
+    """A label cell as a trial label: a number when it reads as one, else the text."""
+    text = str(cell).strip()
+    if not text:
+        raise InputError(f"empty label cell; every row needs a value in column {column!r}",
+                         path=table.path, where=f"line {table.line(row)}, column {column!r}")
+    for cast in (int, float):
+        try:
+            value = cast(text)
+        except ValueError:
+            continue
+        if cast is float and not np.isfinite(value):
+            raise InputError(f"label {text!r} is not a finite number", path=table.path,
+                             where=f"line {table.line(row)}, column {column!r}")
+        return value
+    return text
+
+
+def _table_labels(plan: TrialPlan, mapping: CsvMapping,
+                  tables: dict[str, CsvTable]) -> dict[str, str | int | float]:
+    """``rows_are: samples``: the label and group columns, which must hold one value in the
+    whole table (they label the one trial)."""
+    if TABLE not in tables:
+        return {}
+    table = tables[TABLE]
+    out: dict[str, str | int | float] = {}
+    for c in mapping.trials.label_column_names:
+        cells = table.columns[c].astype(str)
+        differ = np.flatnonzero(cells != cells[0])
+        if len(differ):
+            i = int(differ[0])
+            here, first = str(cells[i]), str(cells[0])
+            raise InputError(f"column {c!r} holds {here!r} here but {first!r} on line "
+                             f"{table.line(0)}; with `rows_are: samples` the table is one "
+                             "trial, so a label column holds one value (use `rows_are: "
+                             "trials` for one trial per row)", path=table.path,
+                             where=f"line {table.line(i)}, column {c!r}")
+        out[c] = _label_value(cells[0], c, table, 0)
+    return out
 
 
 def _unroll(data: np.ndarray, t_row: np.ndarray, row_rate_hz: float, s: Stream,

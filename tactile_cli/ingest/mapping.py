@@ -49,6 +49,9 @@ TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 #: Template field available in every file and name template besides the regex groups:
 #: the matched trial file's stem, or the trial folder's name.
 STEM_FIELD = "stem"
+#: Template field of the trial name with ``layout: rows``, ``rows_are: trials``: the data
+#: row's number in its table (1-based).
+ROW_FIELD = "row"
 
 
 class _Model(BaseModel):
@@ -58,7 +61,8 @@ class _Model(BaseModel):
 class CsvDialect(_Model):
     """How a CSV file is split into rows and columns.
 
-    Quoting is not supported: sensor CSVs are plain delimited numbers, and every row is
+    Standard CSV quoting is honoured: a field in double quotes may hold the delimiter,
+    doubled quotes (``""``) and line breaks (``notes: "slipped, regrasped"``). Every row is
     checked to hold exactly as many fields as the header before parsing.
     """
 
@@ -102,11 +106,14 @@ class CsvDialectOverride(_Model):
 class TrialLayout(_Model):
     """Which paths under each input are trials, and the labels every trial gets."""
 
-    layout: Literal["file", "folder"]
+    layout: Literal["file", "folder", "rows"]
     """``file``: each file matching ``glob`` is one trial (its sibling files named by the
     stream templates belong to it). ``folder``: each folder matching ``glob`` is one trial,
     the stream files are inside it, and files that share a time base are joined row by row
-    (they must have equal row counts)."""
+    (they must have equal row counts). ``rows``: each file matching ``glob`` is a table
+    whose rows are trials (``rows_are: trials``: one trial per row, each stream one sample
+    at t = 0) or the samples of one trial (``rows_are: samples``), with trial labels read
+    from ``label_columns`` and ``group``."""
     glob: str
     """Glob of trial files or folders under each input folder (``**`` recurses), e.g.
     ``"**/*_bio.csv"`` or ``"data_sample_*"``. An input file is itself a trial (file
@@ -121,6 +128,42 @@ class TrialLayout(_Model):
     stem (file layout) or the folder name (folder layout)."""
     labels: dict[str, str | int | float] = Field(default_factory=dict)
     """Constant labels of every trial, e.g. ``{dataset: biotac_slide20}``."""
+    rows_are: Literal["trials", "samples"] = "trials"
+    """``layout: rows`` only. ``trials``: every row of the table is one trial (grasp
+    outcome tables: one row per grasp); ``samples``: the whole table is one trial whose rows
+    are its samples (then ``label_columns`` and ``group`` must hold one value per table)."""
+    label_columns: list[str] = Field(default_factory=list)
+    """``layout: rows`` only. Columns of the table stored as trial labels under their own
+    names (numbers as numbers, text as text; an empty cell is an error), e.g. ``[slipped]``."""
+    group: str | None = None
+    """``layout: rows`` only. The column naming the group a row belongs to (the object
+    grasped, the subject), stored as a trial label of that name, so that
+    ``data.split: {mode: group, by: <column>}`` keeps a group's trials together."""
+
+    @model_validator(mode="after")
+    def _rows_keys(self) -> TrialLayout:
+        if self.layout != "rows":
+            given = sorted({"rows_are", "label_columns", "group"} & self.model_fields_set)
+            if given:
+                raise ValueError(f"{', '.join(f'`{k}`' for k in given)} belong to "
+                                 "`layout: rows`; leave them out with `layout: "
+                                 f"{self.layout}`")
+            return self
+        columns = [*self.label_columns, *([self.group] if self.group else [])]
+        dup = sorted({c for c in columns if columns.count(c) > 1})
+        if dup:
+            raise ValueError(f"column {dup[0]!r} is named twice in `label_columns`/`group`")
+        return self
+
+    @property
+    def row_trials(self) -> bool:
+        """Whether every table row is one trial (``layout: rows``, ``rows_are: trials``)."""
+        return self.layout == "rows" and self.rows_are == "trials"
+
+    @property
+    def label_column_names(self) -> list[str]:
+        """The table columns read as trial labels: ``label_columns`` and ``group``."""
+        return [*self.label_columns, *([self.group] if self.group else [])]
 
     @field_validator("pattern")
     @classmethod
@@ -132,9 +175,13 @@ class TrialLayout(_Model):
                 raise ValueError(f"not a valid regular expression ({exc})") from None
         return value
 
-    def fields(self) -> set[str]:
-        """Template fields a file or name template may use."""
+    def fields(self, *, per_row: bool = False) -> set[str]:
+        """Template fields a file template may use; ``per_row``: those of the trial ``name``,
+        which with ``rows_are: trials`` may also use ``{row}`` (1-based data row) and the
+        label columns."""
         groups = set(re.compile(self.pattern).groupindex) if self.pattern else set()
+        if per_row and self.row_trials:
+            groups |= {ROW_FIELD, *(c for c in self.label_column_names if c.isidentifier())}
         return groups | {STEM_FIELD}
 
 
@@ -253,8 +300,9 @@ class Stream(_Model):
     units: str | dict[str, str]
     """One unit for every channel, or ``{glob: unit}`` matched against the output channel
     names (first match wins; every channel must match)."""
-    time: TimeBase
-    """The time base."""
+    time: TimeBase | None = None
+    """The time base; required except with ``layout: rows``, ``rows_are: trials``, where
+    each trial's one sample is at t = 0 and ``time`` is left out."""
     unroll: Unroll | None = None
     """Treat the channels of a row as consecutive samples of one channel."""
     sample_labels: list[SampleLabel] = Field(default_factory=list)
@@ -292,9 +340,9 @@ class Stream(_Model):
     def templates(self) -> list[tuple[str, str]]:
         """Every file template the stream reads, with the mapping key that names it."""
         out = [(self.file, "file")]
-        if self.time.file is not None:
+        if self.time is not None and self.time.file is not None:
             out.append((self.time.file, "time.file"))
-        if self.time.rate_from is not None:
+        if self.time is not None and self.time.rate_from is not None:
             out.append((self.time.rate_from.file, "time.rate_from.file"))
         out += [(lab.file, f"sample_labels.{lab.name}.file") for lab in self.sample_labels
                 if lab.file is not None]
@@ -322,12 +370,13 @@ class CsvMapping(_Model):
             dup = sorted({v for v in values if values.count(v) > 1})
             if dup:
                 raise ValueError(f"{what} must be distinct (repeated: {', '.join(dup)})")
-        fields = self.trials.fields()
+        self._check_time_bases()
         templates = [(self.trials.name, "trials.name")] if self.trials.name else []
         for s in self.streams:
             templates += [(t, f"streams.{s.name}.{key}") for t, key in s.templates()]
         for template, key in templates:
             used = _template_fields(template, key)
+            fields = self.trials.fields(per_row=key == "trials.name")
             unknown = sorted(used - fields)
             if unknown:
                 raise ValueError(f"`{key}` ({template!r}) uses {', '.join(unknown)}, which the "
@@ -338,13 +387,27 @@ class CsvMapping(_Model):
         if extra:
             raise ValueError(f"`files` has {', '.join(map(repr, extra))}, which no stream reads; "
                              "keys must equal a stream's file template")
-        epochs = {s.time.epoch for s in self.streams if s.time.column is not None}
+        epochs = {s.time.epoch for s in self.streams
+                  if s.time is not None and s.time.column is not None}
         if len(epochs) > 1:
             raise ValueError("time columns of one trial share one clock: set `epoch: true` on "
                              "all of them or on none")
         for s in self.streams:
             self.dialect(s.file)  # a header-less override without names fails here
         return self
+
+    def _check_time_bases(self) -> None:
+        """``time`` is left out exactly when every row is a trial (one sample at t = 0)."""
+        for s in self.streams:
+            if self.trials.row_trials:
+                if s.time is not None or s.unroll is not None:
+                    key = "time" if s.time is not None else "unroll"
+                    raise ValueError(f"`streams.{s.name}.{key}`: with `layout: rows` and "
+                                     "`rows_are: trials` each row is one sample at t = 0; "
+                                     f"leave `{key}` out")
+            elif s.time is None:
+                raise ValueError(f"`streams.{s.name}` needs a `time` (a column, a "
+                                 "`sample_rate_hz` or a `rate_from`)")
 
     def dialect(self, template: str) -> CsvDialect:
         """The dialect of one file template: ``csv`` with the ``files`` override applied."""
@@ -501,5 +564,5 @@ def _inner_model(annotation: Any) -> Any:
     return None
 
 
-__all__ = ["CsvDialect", "CsvMapping", "SampleLabel", "Stream", "TimeBase", "TrialLayout",
-           "Unroll", "ValueFrom", "load_mapping", "render"]
+__all__ = ["ROW_FIELD", "CsvDialect", "CsvMapping", "SampleLabel", "Stream", "TimeBase",
+           "TrialLayout", "Unroll", "ValueFrom", "load_mapping", "render"]

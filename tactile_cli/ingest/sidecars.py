@@ -14,6 +14,9 @@ before any recording is, and applied after the format reader ran:
   written as an integer, else float), text as text; empty cells are skipped. A trial has at
   most one row. A label that a reader or ``--label`` already set must agree. ``nan`` and
   ``inf`` are refused, and so is one text cell in a column whose other cells are numbers.
+  A column named ``split`` is not a label: it sets the trial's ``split`` attribute, which
+  ``tactile train`` uses (``data.split.mode: auto``); its cells are ``train``, ``val``,
+  ``test`` or empty (no split), anything else is an error.
 
 Both files hold no NUL bytes and at least one row after the header. A last line without a
 line break is accepted (hand-written files often lack one), so a last row cut short inside
@@ -27,7 +30,6 @@ Blank lines at the end of a file are ignored; elsewhere they are errors.
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 from collections.abc import Iterator
@@ -36,9 +38,15 @@ from pathlib import Path
 
 from ..config_file import read_text
 from ..errors import InputError
+from ..store.spec import load_spec
 from ..store.writer import StoreWriter, safe_name
+from .csv_records import csv_records
 
 ANNOTATION_COLUMNS = ("trial", "start_s", "end_s", "label")
+#: The trial-labels column that sets the trial's split attribute instead of a label.
+SPLIT_COLUMN = "split"
+#: Its values (the schema's ``split`` values but the empty one, which an empty cell gives).
+SPLITS = tuple(s for s in load_spec().enums["split"] if s)
 _INT = re.compile(r"[+-]?\d+")
 _FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
@@ -53,29 +61,26 @@ class Annotations:
 
 @dataclass(frozen=True)
 class TrialLabels:
-    """Parsed trial labels: trial -> ({label: value}, line)."""
+    """Parsed trial labels: trial -> ({label: value}, line), and trial -> split (train, val
+    or test) for the trials whose ``split`` cell is not empty."""
 
     path: Path
     rows: dict[str, tuple[dict[str, str | int | float], int]] = field(default_factory=dict)
+    splits: dict[str, str] = field(default_factory=dict)
 
 
 def _rows(path: Path, what: str) -> Iterator[tuple[int, list[str]]]:
-    """``(line, cells)`` of every line of a CSV file, the header first (line 1)."""
+    """``(line, cells)`` of every record of a CSV file, the header first: the line the
+    record starts on (a quoted cell may span lines) and its cells, unquoted."""
     text = read_text(path, f"{what} file")
-    lines = text.rstrip("\r\n \t").splitlines()
-    if not lines or not lines[0].strip():
+    body = text.rstrip("\r\n \t")
+    if not body or not body.splitlines()[0].strip():
         raise InputError(f"{what} file is empty; expected a header line", path=path)
     if "\0" in text:
         raise InputError("NUL bytes in the line (binary data, or a damaged file); the "
                          f"{what} file must be plain UTF-8 text", path=path,
                          where=f"line {text[:text.index(chr(0))].count(chr(10)) + 1}")
-    reader = csv.reader(lines, strict=True)
-    try:
-        for cells in reader:
-            yield reader.line_num, cells
-    except csv.Error as exc:
-        raise InputError(f"not valid CSV ({exc})", path=path,
-                         where=f"line {reader.line_num}") from None
+    yield from csv_records(body, path)
 
 
 def _header(path: Path, cells: list[str]) -> list[str]:
@@ -150,6 +155,7 @@ def read_trial_labels(path: str | Path) -> TrialLabels:
     """Parse a trial-labels CSV (see the module docstring); raises InputError."""
     path = Path(path)
     rows: dict[str, tuple[dict[str, str | int | float], int]] = {}
+    splits: dict[str, str] = {}
     cells_of: dict[str, list[tuple[int, str | int | float]]] = {}  # column -> (line, value)
     names: list[str] = []
     for line, cells in _rows(path, "trial labels"):
@@ -159,8 +165,8 @@ def read_trial_labels(path: str | Path) -> TrialLabels:
                 raise InputError(f"no 'trial' column; the header names {names}", path=path,
                                  where="line 1")
             if len(names) == 1:
-                raise InputError("only a 'trial' column; add one column per label", path=path,
-                                 where="line 1")
+                raise InputError("only a 'trial' column; add one column per label (or a "
+                                 "'split' column)", path=path, where="line 1")
             keys = [safe_name(n) for n in names if n != "trial"]
             clash = sorted({k for k in keys if keys.count(k) > 1})
             if clash:
@@ -174,6 +180,9 @@ def read_trial_labels(path: str | Path) -> TrialLabels:
         if trial in rows:
             raise InputError(f"trial {trial!r} has a second row (the first is line "
                              f"{rows[trial][1]})", path=path, where=f"line {line}")
+        split = _split(path, line, row.pop(SPLIT_COLUMN, ""))
+        if split:
+            splits[trial] = split
         labels = {}
         for key, cell in row.items():
             if cell.strip() == "":
@@ -188,7 +197,18 @@ def read_trial_labels(path: str | Path) -> TrialLabels:
         rows[trial] = (labels, line)
     _no_rows(path, "trial labels", bool(rows))
     _text_among_numbers(path, cells_of)
-    return TrialLabels(path, rows)
+    return TrialLabels(path, rows, splits)
+
+
+def _split(path: Path, line: int, cell: str) -> str:
+    """The split named by a ``split`` cell (``""`` when empty); InputError for any other
+    value than :data:`SPLITS`."""
+    value = cell.strip()
+    if value and value not in SPLITS:
+        raise InputError(f"split {value!r} is not one of {', '.join(SPLITS)}; write one of them "
+                         "or leave the cell empty (no split)", path=path,
+                         where=f"line {line}, column {SPLIT_COLUMN!r}")
+    return value
 
 
 def _non_finite(value: str | int | float) -> bool:
@@ -272,6 +292,12 @@ def apply_sidecars(writer: StoreWriter, *, annotations: Annotations | None = Non
                                      "by the input or `labels`", path=labels.path,
                                      where=f"line {line}")
             trial_writer.set_labels(**values)
+            split = labels.splits.get(trial)
+            if split is not None:
+                if trial_writer.split not in ("", split):
+                    raise InputError(f"split {split!r} contradicts {trial_writer.split!r} set by "
+                                     "the input", path=labels.path, where=f"line {line}")
+                trial_writer.set_split(split)
 
 
 __all__ = ["Annotations", "TrialLabels", "read_annotations", "read_trial_labels",

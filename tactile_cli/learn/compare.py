@@ -183,6 +183,8 @@ class Comparison:
             return "accuracy"
         if self.metric == "macro_f1":
             return "macro F1"
+        if self.metric == "trial_accuracy":
+            return "per-trial accuracy"
         return f"F1 of class {self.metric.split(':', 1)[1]!r}"
 
     def as_dict(self) -> dict[str, Any]:
@@ -272,6 +274,12 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
         value = head["accuracy"]
     elif metric == "macro_f1":
         value = head["macro_f1"]
+    elif metric == "trial_accuracy":
+        votes = head.get("per_trial")
+        if not isinstance(votes, dict):
+            raise InputError(f"head {head_name!r} has no per-trial result (only trial-level "
+                             "targets are voted per trial); compare by accuracy", path=path)
+        value = votes.get("majority_accuracy")
     elif metric.startswith("f1:"):
         cls = metric.split(":", 1)[1]
         found = [c for c in head["per_class"] if c["name"] == cls]
@@ -281,7 +289,8 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
                              path=path)
         value = found[0]["f1"]
     else:
-        raise InputError(f"`metric` must be accuracy, macro_f1 or f1:<class>, got {metric!r}")
+        raise InputError("`metric` must be accuracy, macro_f1, trial_accuracy or f1:<class>, "
+                         f"got {metric!r}")
     if value is None or not math.isfinite(value):
         raise InputError(f"{metric} is not a number in this evaluation (no windows of the "
                          "class?)", path=path)
@@ -297,6 +306,17 @@ def run_labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
             name = f"{d.resolve().parent.name}/{name}"
         out.append(f"{fam}/{name}")
     return out
+
+
+def distinct_run_paths(run_dirs: Sequence[str | Path]) -> list[str]:
+    """Each run folder relative to the common folder of all the runs' parents (its own name
+    at least): ``sweep/lr0.003/lstm`` and ``sweep/lr0.01/lstm`` -> ``lr0.003/lstm``,
+    ``lr0.01/lstm``; the part of each path that tells the runs apart."""
+    paths = [Path(d).resolve() for d in run_dirs]
+    if not paths:
+        return []
+    common = Path(os.path.commonpath([p.parent for p in paths]))
+    return [p.relative_to(common).as_posix() for p in paths]
 
 
 def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> RunPoint:
@@ -569,6 +589,6 @@ def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | Non
 
 __all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "ComparisonFiles",
            "RunPoint", "check_run_folder", "choose_data_name", "compare", "compare_points",
-           "comparison_record", "eval_names", "pareto_front", "pick_fastest", "pick_needed",
-           "plot_comparison", "read_point", "run_labels", "table_rows", "within_margin",
-           "write_atomic", "write_comparison"]
+           "comparison_record", "distinct_run_paths", "eval_names", "pareto_front",
+           "pick_fastest", "pick_needed", "plot_comparison", "read_point", "run_labels",
+           "table_rows", "within_margin", "write_atomic", "write_comparison"]

@@ -85,12 +85,21 @@ class TargetConfig(_Model):
 
 
 class SplitConfig(_Model):
-    """How trials (never windows) are divided into train, val and test."""
+    """How trials (never windows) are divided into train, val and test, and into the folds
+    of ``tactile train --cv`` (see :mod:`.splits`)."""
 
-    mode: Literal["auto", "attribute", "random"] = "auto"
-    """``attribute``: each trial's ``split`` attribute (train/val/test); ``random``: seeded
-    by trial with the fractions below; ``auto``: the attribute when every trial has one,
+    mode: Literal["auto", "attribute", "random", "stratified", "group"] = "auto"
+    """``attribute``: each trial's ``split`` attribute (train/val/test; ``tactile ingest
+    --trial-labels`` column ``split`` or ``tactile train --split-from CSV`` sets it);
+    ``random``: seeded by trial with the fractions below; ``stratified``: the same, per
+    class of the label ``by``, so that every class is in every split where it has enough
+    trials; ``group``: whole groups of trials sharing the value of label ``by`` (a day, an
+    object, a session) go to one side; ``auto``: the attribute when every trial has one,
     random when none has."""
+    by: str | None = Field(default=None, min_length=1)
+    """Label that ``stratified`` and ``group`` use: a trial label, or a per-sample label
+    (a trial's class is then the set of classes its samples hold, e.g. ``no_slip`` or
+    ``no_slip+slip``). Default for ``stratified``: the first classification target."""
     val_fraction: float = Field(default=0.2, ge=0, lt=1)
     test_fraction: float = Field(default=0.0, ge=0, lt=1)
     seed: int | None = Field(default=None, ge=0, le=_MAX_SEED)
@@ -103,6 +112,8 @@ class SplitConfig(_Model):
                 f"val_fraction + test_fraction (={self.val_fraction + self.test_fraction}) "
                 "must be < 1: some trials must remain for training"
             )
+        if self.mode == "group" and self.by is None:
+            raise ValueError("`mode: group` needs `by`: the label whose trials stay together")
         return self
 
 
@@ -113,7 +124,10 @@ class DataConfig(_Model):
     """Signal stream of every trial. ``event_counts`` is also computed on the fly from a
     trial's events (bins of ``bin_s``) when the trial has no such stream."""
     channels: list[str] = Field(min_length=1, max_length=_MAX_LIST)
-    """Channel names of the stream's sensor, in the order the model sees them."""
+    """Channel names of the stream's sensor, in the order the model sees them. A name with
+    ``*``, ``?`` or ``[`` is a glob pattern (``ele*``, ``txl?_z``) matched against the
+    sensor's channel names in their stored order; ``tactile train`` writes the matched names
+    into the run's resolved config."""
     window: int = Field(ge=1, le=_MAX_SAMPLES)
     """Samples per window."""
     stride: int = Field(default=1, ge=1, le=_MAX_SAMPLES)
@@ -141,6 +155,11 @@ class DataConfig(_Model):
     visible (event counts span three decades within one trial)."""
     normalise: bool = True
     """Per-channel standardisation with statistics from the training split only."""
+    window_norm: Literal["none", "center_scale"] = "none"
+    """Applied to every window after ``normalise``: ``center_scale`` removes each channel's
+    mean over the window and divides by its largest absolute value, so every channel of
+    every window spans [-1, 1] (paper 001, sec. 4: the network sees the shape of a
+    vibration, not its amplitude; a channel that is constant over the window becomes 0)."""
     class_weights: bool = True
     """Weight each classification loss by inverse class frequency in the training split."""
     split: SplitConfig = SplitConfig()

@@ -8,8 +8,8 @@ The pipeline of ``tactile train`` and ``tactile evaluate`` (issue 4, item 2):
    ``event_counts`` stream is counted on the fly (contract 2:
    :func:`tactile_cli.events.accumulate.trial_counts`) and labelled per bin from its
    annotations (:func:`~tactile_cli.events.accumulate.counts_to_labels`).
-2. :func:`assign_splits` divides trials (never windows) into train/val/test: the trials'
-   ``split`` attribute, or a seeded random order by trial.
+2. :func:`~tactile_cli.learn.splits.assign_splits` divides trials (never windows) into
+   train/val/test (attribute, random, stratified or grouped; :mod:`.splits`).
 3. :func:`fit_normalisation` takes per-channel mean and standard deviation from the
    training trials' samples only; the statistics are saved with the model.
 4. :func:`make_windows` cuts each trial into windows of ``window`` samples whose ends are
@@ -32,7 +32,7 @@ feature vector is feature-major: all channels' means, then all stds, and so on.
 
 from __future__ import annotations
 
-import hashlib
+import fnmatch
 import json
 import math
 from collections.abc import Sequence
@@ -43,11 +43,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..natural import natural_key
 from ..store.trials import TactileFile, Trial
-from .config import SUMMARY_FEATURES, DataConfig, SplitConfig, TargetConfig
+from .config import SUMMARY_FEATURES, DataConfig, TargetConfig
 from .heads import HeadSpec
-
-SPLITS: tuple[str, ...] = ("train", "val", "test")
+from .splits import SPLITS, SplitAssignment, assign_splits
 
 
 @dataclass
@@ -96,6 +96,55 @@ def data_files(data_paths: Sequence[str | Path]) -> list[Path]:
         if not p.is_file():
             raise InputError("data file not found", path=p)
     return paths
+
+
+_GLOB = set("*?[")
+
+
+def has_patterns(channels: Sequence[str]) -> bool:
+    """Whether any channel name is a glob pattern (holds ``*``, ``?`` or ``[``)."""
+    return any(_GLOB & set(c) for c in channels)
+
+
+def expand_channels(patterns: Sequence[str], names: Sequence[str], *, path: str | Path,
+                    where: str) -> list[str]:
+    """Channel names and glob patterns -> names, each pattern's matches in the sensor's
+    order (``names``), without repeats; a pattern or name that matches nothing is an
+    InputError listing the sensor's channels."""
+    out: list[str] = []
+    for pattern in patterns:
+        hits = [n for n in names if fnmatch.fnmatchcase(n, pattern)] \
+            if _GLOB & set(pattern) else ([pattern] if pattern in names else [])
+        if not hits:
+            shown = ", ".join(names[:12]) + (f", ... ({len(names)} in all)"
+                                             if len(names) > 12 else "")
+            raise InputError(f"channel {pattern!r} matches no channel of the stream "
+                             f"(channels: {shown}); fix data.channels", path=path, where=where)
+        out += [h for h in hits if h not in out]
+    return out
+
+
+def resolve_channels(data: DataConfig, paths: Sequence[str | Path]) -> DataConfig:
+    """``data`` with glob patterns in ``channels`` replaced by the matching channel names of
+    the stream in the first trial of the first file (unchanged when there are none)."""
+    if not has_patterns(data.channels):
+        return data
+    path = Path(paths[0])
+    with TactileFile(path) as f:
+        if not f.trial_names:
+            raise InputError("the file has no trials", path=path)
+        trial = f.trial(f.trial_names[0])
+        where = f"{trial.where}/signals/{data.stream}"
+        if trial.has_signal(data.stream):
+            names = list(trial.signal_sensor(data.stream).channel_names)
+        elif data.stream == "event_counts" and trial.has_events:
+            names = ["positive", "negative", "net"]
+        else:
+            raise InputError(f"trial has no stream {data.stream!r} (streams: "
+                             f"{', '.join(trial.signal_names) or 'none'}); fix data.stream",
+                             path=path, where=trial.where)
+    channels = expand_channels(data.channels, names, path=path, where=where)
+    return data.model_copy(update={"channels": channels})
 
 
 def read_trials(paths: Sequence[str | Path], data: DataConfig, *, trained: bool = False
@@ -218,19 +267,12 @@ def resolve_heads(targets: Sequence[TargetConfig], trials: Sequence[TrialSeries]
                 classes = _sample_classes(target.name, trials)
             else:
                 values = {_trial_value(t, target.name) for t in trials}
-                classes = tuple(sorted((str(v) for v in values), key=_natural))
+                classes = tuple(sorted((str(v) for v in values), key=natural_key))
             if len(classes) < 2:
                 raise InputError(f"target {target.name!r} has {len(classes)} class(es) "
                                  f"({', '.join(classes)}); a classifier needs at least 2")
         heads.append(HeadSpec(target.name, target.kind, target.source, target.weight, classes))
     return heads
-
-
-def _natural(s: str) -> tuple[int, float, str]:
-    try:
-        return (0, float(s), s)
-    except ValueError:
-        return (1, 0.0, s)
 
 
 def _sample_classes(name: str, trials: Sequence[TrialSeries]) -> tuple[str, ...]:
@@ -318,76 +360,6 @@ def per_sample_targets(trial: TrialSeries, heads: Sequence[HeadSpec]) -> dict[st
                                  where=f"/trials/{trial.trial}/labels") from None
             out[head.name] = np.full(n, number, dtype=np.float64)
     return out
-
-
-# -- splits ----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SplitAssignment:
-    """Which split each trial belongs to, and how that was decided."""
-
-    splits: tuple[str, ...]  # one of SPLITS per trial, in the order of the trials
-    mode: str  # "attribute" or "random"
-
-    def indices(self, split: str) -> list[int]:
-        return [i for i, s in enumerate(self.splits) if s == split]
-
-    def counts(self) -> dict[str, int]:
-        return {s: self.splits.count(s) for s in SPLITS}
-
-
-def assign_splits(trials: Sequence[TrialSeries], split: SplitConfig, seed: int
-                  ) -> SplitAssignment:
-    """Assign whole trials to train/val/test.
-
-    ``attribute`` uses each trial's ``split`` attribute; ``random`` ranks the trials by a
-    hash of (seed, file name, trial name) and gives the first ``round(test_fraction n)``
-    to test, the next ``round(val_fraction n)`` to val (at least one each when the
-    fraction is > 0) and the rest to train: the same files and seed give the same split,
-    whatever order the files are given in. ``auto`` is ``attribute`` when every trial has
-    a split attribute and ``random`` when none has.
-    """
-    attrs = [t.split_attr for t in trials]
-    mode = split.mode
-    if mode == "auto":
-        if all(a in SPLITS for a in attrs):
-            mode = "attribute"
-        elif all(a == "" for a in attrs):
-            mode = "random"
-        else:
-            t = next(t for t in trials if t.split_attr not in SPLITS)
-            raise InputError("some trials have a split attribute and this one has none; set "
-                             "data.split.mode to attribute or random", path=t.file,
-                             where=f"/trials/{t.trial}")
-    if mode == "attribute":
-        for t in trials:
-            if t.split_attr not in SPLITS:
-                raise InputError(f"split attribute is {t.split_attr!r}, not one of "
-                                 f"{', '.join(SPLITS)}; set data.split.mode: random",
-                                 path=t.file, where=f"/trials/{t.trial}")
-        return SplitAssignment(tuple(attrs), "attribute")
-    n = len(trials)
-    split_seed = seed if split.seed is None else split.seed
-
-    def rank(t: TrialSeries) -> str:
-        return hashlib.sha256(f"{split_seed}|{t.key}".encode()).hexdigest()
-
-    order = sorted(range(n), key=lambda i: (rank(trials[i]), trials[i].file))
-
-    def count(fraction: float) -> int:
-        return 0 if fraction <= 0 else max(1, round(fraction * n))
-
-    n_test, n_val = count(split.test_fraction), count(split.val_fraction)
-    if n - n_test - n_val < 1:
-        raise InputError(f"{n} trial(s) cannot be split into {n_val} val and {n_test} test "
-                         "trial(s) with at least one left for training; give more trials or "
-                         "lower data.split.val_fraction / test_fraction")
-    out = ["train"] * n
-    for pos, i in enumerate(order):
-        if pos < n_test:
-            out[i] = "test"
-        elif pos < n_test + n_val:
-            out[i] = "val"
-    return SplitAssignment(tuple(out), "random")
 
 
 # -- normalisation ---------------------------------------------------------------------------
@@ -491,6 +463,11 @@ class WindowSet:
     target_t_s: np.ndarray
     near_boundary: dict[str, np.ndarray]
     trials: list[str]  # TrialSeries.key of each trial
+    label_changes: dict[str, bool] = field(default_factory=dict)
+    """Sample-classification head name -> whether any trial's labels change inside the
+    trial (a time series with transitions; the boundary metric means something only then)."""
+    window_norm: str = "none"
+    """Per-window transform applied by :meth:`windows` (see :func:`center_scale`)."""
 
     def __len__(self) -> int:
         return int(self.starts.shape[0])
@@ -502,14 +479,26 @@ class WindowSet:
     def windows(self, idx: np.ndarray | slice | None = None) -> np.ndarray:
         """(k, window, c) float32 windows ``idx`` (all when None)."""
         starts = self.starts if idx is None else self.starts[idx]
-        return self.x[starts[:, None] + np.arange(self.window)]
+        out = self.x[starts[:, None] + np.arange(self.window)]
+        return center_scale(out) if self.window_norm == "center_scale" else out
 
     def subset(self, mask: np.ndarray) -> WindowSet:
         """The windows where ``mask`` (n_windows,) is true (sharing ``x``)."""
         return WindowSet(self.x, self.starts[mask], self.window,
                          {k: v[mask] for k, v in self.targets.items()}, self.trial_index[mask],
                          self.end_index[mask], self.target_index[mask], self.target_t_s[mask],
-                         {k: v[mask] for k, v in self.near_boundary.items()}, self.trials)
+                         {k: v[mask] for k, v in self.near_boundary.items()}, self.trials,
+                         dict(self.label_changes), self.window_norm)
+
+
+def center_scale(windows: np.ndarray) -> np.ndarray:
+    """(k, w, c) windows -> (k, w, c) float32 with each channel of each window centred on
+    its mean and divided by its largest absolute deviation, so that it spans [-1, 1]
+    (paper 001, sec. 4); a channel constant over its window becomes all zeros."""
+    x = np.asarray(windows, dtype=np.float32)
+    x = x - x.mean(axis=1, keepdims=True)
+    peak = np.abs(x).max(axis=1, keepdims=True)
+    return np.divide(x, peak, out=np.zeros_like(x), where=peak > 0)
 
 
 def window_ends(n_samples: int, data: DataConfig) -> np.ndarray:
@@ -542,6 +531,7 @@ def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequenc
     targets: dict[str, list[np.ndarray]] = {h.name: [] for h in heads}
     near: dict[str, list[np.ndarray]] = {
         h.name: [] for h in heads if h.kind == "classification" and h.source == "sample"}
+    changes = dict.fromkeys(near, False)
     offset = 0
     for i, trial in enumerate(trials):
         n = trial.x.shape[0]
@@ -575,8 +565,10 @@ def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequenc
             targets[head.name].append(v.astype(np.int64 if head.kind == "classification"
                                                else np.float32))
             if head.name in near:
-                near[head.name].append(_near_change(per_sample[head.name],
-                                                    data.boundary_margin)[target])
+                lab = per_sample[head.name]
+                labelled = lab[lab >= 0]
+                changes[head.name] |= bool((labelled[1:] != labelled[:-1]).any())
+                near[head.name].append(_near_change(lab, data.boundary_margin)[target])
         starts.append(offset + e + pad - (w - 1))
         trial_idx.append(np.full(e.shape[0], i, dtype=np.int64))
         ends.append(e)
@@ -597,7 +589,7 @@ def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequenc
         trial_index=cat(trial_idx, np.int64), end_index=cat(ends, np.int64),
         target_index=cat(tgt_idx, np.int64), target_t_s=cat(tgt_t, np.float64),
         near_boundary={k: cat(v, bool) for k, v in near.items()},
-        trials=[t.key for t in trials],
+        trials=[t.key for t in trials], label_changes=changes, window_norm=data.window_norm,
     )
 
 
@@ -659,7 +651,8 @@ def summary_features(windows: np.ndarray, names: Sequence[str] = SUMMARY_FEATURE
 
 
 __all__ = ["SPLITS", "Normalisation", "SplitAssignment", "TrialSeries",
-           "WindowSet", "assign_splits", "check_heads_match", "class_weights", "data_files",
+           "WindowSet", "assign_splits", "center_scale", "check_heads_match", "class_weights",
+           "data_files",
            "fit_normalisation", "make_windows", "per_sample_targets", "read_trials",
            "regression_stats", "resolve_heads", "summary_features", "transform_samples",
            "window_ends"]

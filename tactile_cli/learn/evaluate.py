@@ -33,13 +33,13 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.origin import data_origin
 from ..store.outdir import check_output_folder
 from ..store.reader import recording_hashes
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
 from .data import (
     WindowSet,
-    assign_splits,
     check_heads_match,
     data_files,
     make_windows,
@@ -50,16 +50,22 @@ from .heads import HeadSpec
 from .inputs import checked_input, input_record
 from .latency import LatencyStats, measure_latency
 from .models import count_parameters, state_size_bytes
+from .splits import held_out_trials
 from .train import predict
+from .trial_metrics import bootstrap_window_intervals, per_trial_confusion, trial_votes
 
 
 @dataclass(frozen=True)
 class ClassMetrics:
+    """One row of Table I. ``absent``: the class has no support in the evaluated data (its
+    recall and F1 mean nothing and it is left out of the macro average)."""
+
     name: str
     precision: float
     recall: float
     f1: float
     support: int
+    absent: bool = False
 
 
 @dataclass
@@ -78,6 +84,14 @@ class ClassificationMetrics:
     n_near_boundary: int | None = None
     accuracy_excluding_boundaries: float | None = None
     kind: str = "classification"
+    warnings: list[str] = field(default_factory=list)
+    """Zero-support classes left out of the macro F1; a macro F1 over one present class."""
+    accuracy_ci95: list[float] | None = None
+    macro_f1_ci95: list[float] | None = None
+    """95 % bootstrap intervals over trials (:mod:`.trial_metrics`); None with < 2 trials."""
+    n_trials: int | None = None
+    per_trial: dict[str, Any] | None = None
+    """Trial-level targets: :class:`.trial_metrics.TrialVotes` as a dict."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -102,7 +116,9 @@ def classification_metrics(y_true: np.ndarray, y_pred: np.ndarray, classes: Sequ
                            boundary_margin: int | None = None) -> ClassificationMetrics:
     """Accuracy, per-class P/R/F1 and confusion matrix of class indices (n,) each.
 
-    A class never predicted has precision 0, one never present recall 0 (and F1 0)."""
+    A class never predicted has precision 0. A class never present (zero support) is
+    flagged ``absent``, left out of the macro F1 and named in ``warnings``; a macro F1 over
+    a single present class carries a warning too (it says nothing about the others)."""
     k = len(classes)
     y_true = np.asarray(y_true, dtype=np.int64)
     y_pred = np.asarray(y_pred, dtype=np.int64)
@@ -115,18 +131,37 @@ def classification_metrics(y_true: np.ndarray, y_pred: np.ndarray, classes: Sequ
     f1 = np.divide(2 * precision * recall, denom, out=np.zeros(k), where=denom > 0)
     n = int(y_true.shape[0])
     per_class = [ClassMetrics(str(c), float(precision[i]), float(recall[i]), float(f1[i]),
-                              int(actual[i])) for i, c in enumerate(classes)]
+                              int(actual[i]), bool(actual[i] == 0))
+                 for i, c in enumerate(classes)]
+    warnings = support_warnings(head, [str(c) for c in classes], actual)
     out = ClassificationMetrics(
         head=head, classes=[str(c) for c in classes], n=n,
         accuracy=float(tp.sum() / n) if n else math.nan,
         macro_f1=float(f1[actual > 0].mean()) if (actual > 0).any() else math.nan,
-        per_class=per_class, confusion_matrix=cm.tolist())
+        per_class=per_class, confusion_matrix=cm.tolist(), warnings=warnings)
     if near_boundary is not None:
         keep = ~np.asarray(near_boundary, dtype=bool)
         out.boundary_margin = boundary_margin
         out.n_near_boundary = int((~keep).sum())
         out.accuracy_excluding_boundaries = (
             float((y_true[keep] == y_pred[keep]).mean()) if keep.any() else math.nan)
+    return out
+
+
+def support_warnings(head: str, classes: Sequence[str], support: np.ndarray) -> list[str]:
+    """Warnings for classes without support and for a single present class."""
+    if not len(support) or support.sum() == 0:
+        return [f"{head}: no labelled window in the evaluated data"]
+    absent = [c for c, n in zip(classes, support, strict=True) if n == 0]
+    out = []
+    if absent:
+        out.append(f"{head}: class(es) {', '.join(absent)} have no support in the evaluated "
+                   "data: their recall and F1 mean nothing and they are left out of the macro "
+                   "F1")
+    present = [c for c, n in zip(classes, support, strict=True) if n > 0]
+    if len(present) == 1:
+        out.append(f"{head}: only class {present[0]} is present: accuracy and macro F1 say "
+                   "nothing about telling the classes apart")
     return out
 
 
@@ -163,6 +198,18 @@ class EvalResult:
     """The data's stream, sample period, channels and units, and whether they were checked
     against the run's (:func:`.inputs.input_record`)."""
     notes: list[str] = field(default_factory=list)
+    cv: dict[str, Any] | None = None
+    """Cross-validated runs: folds, per-fold results, their mean and spread."""
+    origin: dict[str, Any] | None = None
+    """Where the data come from (recorded, simulated, synthetic; :mod:`..store.origin`)."""
+
+    @property
+    def warnings(self) -> list[str]:
+        """Every head's warnings (zero support, one present class) and the CV plan's."""
+        out = list((self.cv or {}).get("warnings", []))
+        for h in self.heads:
+            out += getattr(h, "warnings", [])
+        return out
 
     @property
     def accuracy(self) -> float | None:
@@ -187,7 +234,9 @@ class EvalResult:
             "latency": None if self.latency is None else self.latency.as_dict(),
             "model": {"n_params": self.n_params, "size_mb": self.size_mb,
                       "file_size_bytes": self.file_size_bytes},
-            "input": self.input, "notes": list(self.notes),
+            "input": self.input, "notes": list(self.notes), "warnings": self.warnings,
+            **({"cv": self.cv} if self.cv is not None else {}),
+            "origin": self.origin,
             **self.extra,
         }
 
@@ -196,22 +245,38 @@ def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: 
                  targets_scale: dict[str, tuple[float, float]], boundary_margin: int
                  ) -> tuple[list[ClassificationMetrics | RegressionMetrics],
                             dict[str, np.ndarray]]:
-    """Metrics of every head and the decoded predictions (class index or value)."""
+    """Metrics of every head and the decoded predictions (class index or value).
+
+    Classification heads also get bootstrap intervals over trials and, for trial-level
+    targets, per-trial majority-vote and mean-probability results; the accuracy without
+    windows near a label change only where some trial's labels change inside the trial."""
     metrics: list[ClassificationMetrics | RegressionMetrics] = []
     decoded: dict[str, np.ndarray] = {}
+    n_trials = len(ws.trials)
     for head in heads:
         out = outputs[head.name]
         if head.kind == "classification":
             pred = out.argmax(axis=1)
             decoded[head.name] = pred
-            metrics.append(classification_metrics(
+            changes = ws.label_changes.get(head.name, False)
+            m = classification_metrics(
                 ws.targets[head.name], pred, head.classes, head=head.name,
-                near_boundary=ws.near_boundary.get(head.name),
-                boundary_margin=boundary_margin if head.name in ws.near_boundary else None))
+                near_boundary=ws.near_boundary.get(head.name) if changes else None,
+                boundary_margin=boundary_margin if changes else None)
+            cms = per_trial_confusion(ws.targets[head.name], pred, ws.trial_index, n_trials,
+                                      len(head.classes))
+            cms = cms[cms.sum(axis=(1, 2)) > 0]
+            m.n_trials = int(cms.shape[0])
+            ci = bootstrap_window_intervals(cms)
+            m.accuracy_ci95, m.macro_f1_ci95 = ci["accuracy_ci95"], ci["macro_f1_ci95"]
+            if head.source == "trial":
+                votes = trial_votes(ws.targets[head.name], out, ws.trial_index)
+                m.per_trial = None if votes is None else votes.as_dict()
+            metrics.append(m)
         else:
-            m, s = targets_scale.get(head.name, (0.0, 1.0))
-            pred = out.astype(np.float64) * s + m
-            true = ws.targets[head.name].astype(np.float64) * s + m
+            m_, s_ = targets_scale.get(head.name, (0.0, 1.0))
+            pred = out.astype(np.float64) * s_ + m_
+            true = ws.targets[head.name].astype(np.float64) * s_ + m_
             decoded[head.name] = pred
             metrics.append(regression_metrics(true, pred, head=head.name))
     return metrics, decoded
@@ -219,37 +284,48 @@ def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: 
 
 def evaluate(
     run_dir: str | Path,
-    data_paths: Sequence[str | Path],
+    data_paths: Sequence[str | Path] | None,
     *,
     split: Literal["all", "test"] = "all",
     name: str | None = None,
     latency: bool = True,
     threads: int | None = None,
     command: str | None = None,
+    overwrite: bool = False,
 ) -> EvalResult:
-    """Evaluate a run on data files and write ``RUN/eval/<name>/`` (replacing an earlier
-    evaluation of the same name).
+    """Evaluate a run on data files and write ``RUN/eval/<name>/`` (an existing evaluation
+    of that name is an error unless ``overwrite``; the folder is written atomically).
 
-    ``split="test"`` keeps the trials the run's split rule (the same config and seed)
-    assigns to test, which on the training files are exactly the training's test trials;
-    ``"all"`` uses every trial. ``threads`` (default 1) is the torch thread count of the
-    latency measurement. Data of another sample period (more than 0.1 %), other channels
-    or units than the run was trained on are refused (:func:`.inputs.check_input`).
+    ``split="test"`` keeps the trials the run held out for test (its ``split.csv``; for
+    trials the run never saw, those its split rule puts in test); ``"all"`` uses every
+    trial. ``threads`` (default 1) is the torch thread count of the latency measurement.
+    Data of another sample period (more than 0.1 %), other channels or units than the run
+    was trained on are refused (:func:`.inputs.check_input`). A cross-validated run
+    (``tactile train --cv``) is evaluated fold by fold on its held-out trials
+    (:func:`tactile_cli.learn.cv.evaluate_cv`); ``data_paths`` may then be None (the
+    run's own data).
     """
+    info = runs.read_run_info(Path(run_dir))
+    if info.get("cv") is not None:
+        from .cv import evaluate_cv
+
+        return evaluate_cv(run_dir, data_paths, name=name, latency=latency, threads=threads,
+                           command=command, overwrite=overwrite, split=split)
+    if not data_paths:
+        raise InputError("no data files; give `data_paths`")
     run = runs.load_run(run_dir)
     paths = data_files(data_paths)
     if split not in ("all", "test"):
         raise InputError(f"`split` must be all or test, got {split!r}")
-    # a file at RUN/eval or RUN/eval/<name> is refused before any work
-    check_output_folder(run.path / runs.EVAL_DIR / (name or runs.eval_dir_name(paths, split)),
-                        overwrite=True)
+    name = name or runs.eval_dir_name(paths, split)
+    out_dir = check_eval_folder(run.path, name, overwrite)
     cfg = run.config
     trials = read_trials(paths, cfg.data, trained=True)
     spec, notes = checked_input(trials, cfg.data.stream, run.input, run.path)
     check_heads_match(run.heads, trials, stream=cfg.data.stream)
     if split == "test":
-        assignment = assign_splits(trials, cfg.data.split, cfg.seed)
-        trials = [trials[i] for i in assignment.indices("test")]
+        trials = held_out_trials(trials, split_csv=run.path / runs.SPLIT_CSV, split=cfg.data.split,
+                             seed=cfg.seed, targets=cfg.data.targets)
         if not trials:
             raise InputError("no trial of these files is in the test split (the run's config "
                              f"has test_fraction {cfg.data.split.test_fraction}); use "
@@ -262,35 +338,57 @@ def evaluate(
     outputs = predict(model, ws)
     metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
                                     cfg.data.boundary_margin)
-    lat = None
-    if latency:
-        rng = np.random.default_rng(0)
-        pick = rng.choice(len(ws), size=min(len(ws), 2048), replace=False)
-        lat = measure_latency(model, ws.windows(np.sort(pick)), threads=threads)
-    hashes = [sha256_of(p) for p in paths]
-    trained_on = {d["sha256"] for d in run.info.get("data", [])}
-    name = name or runs.eval_dir_name(paths, split)
-    out_dir = run.path / runs.EVAL_DIR / name
+    lat = measure_latency_of(model, ws, threads) if latency else None
     result = EvalResult(
         run=str(run.path), family=cfg.model.family, name=name, split=split,
-        data=[{"path": str(p), "sha256": h,
-               "recordings_sha256": recording_hashes(p, h),
-               "n_trials": sum(1 for t in trials if t.file == str(p))}
-              for p, h in zip(paths, hashes, strict=True)],
-        overlaps_training=[str(p) for p, h in zip(paths, hashes, strict=True)
-                           if h in trained_on],
+        data=data_records(paths, trials), overlaps_training=overlaps(paths, run.info),
         n_trials=len(trials), n_windows=len(ws), heads=metrics,
         n_params=count_parameters(model), size_mb=state_size_bytes(model) / 1e6,
         file_size_bytes=(run.path / runs.MODEL_PT).stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, run.input), notes=notes,
+        origin=data_origin(paths),
     )
-    _write(result, run.heads, ws, decoded, run.normalisation.targets)
+    write_eval(result, run.heads, ws, decoded, run.normalisation.targets, overwrite=overwrite)
     return result
 
 
-def _write(result: EvalResult, heads: Sequence[HeadSpec], ws: WindowSet,
-           decoded: dict[str, np.ndarray], scale: dict[str, tuple[float, float]]) -> None:
+def check_eval_folder(run_path: Path, name: str, overwrite: bool) -> Path:
+    """``RUN/eval/<name>``, after refusing an existing one (without ``overwrite``) and a
+    file where a folder must go, before any work."""
+    out_dir = run_path / runs.EVAL_DIR / name
+    if out_dir.is_dir() and not overwrite:
+        raise InputError("evaluation folder exists; pass `overwrite=True` to replace it "
+                         "or give another `name`", path=out_dir)
+    check_output_folder(out_dir, overwrite=True)
+    return out_dir
+
+
+def measure_latency_of(model: Any, ws: WindowSet, threads: int | None) -> LatencyStats:
+    """Batch-1 latency and throughput on up to 2,048 windows of ``ws`` (seeded pick)."""
+    rng = np.random.default_rng(0)
+    pick = rng.choice(len(ws), size=min(len(ws), 2048), replace=False)
+    return measure_latency(model, ws.windows(np.sort(pick)), threads=threads)
+
+
+def data_records(paths: Sequence[Path], trials: Sequence[Any]) -> list[dict[str, Any]]:
+    """Per data file: path, SHA-256, the recordings' hashes and the trials evaluated."""
+    return [{"path": str(p), "sha256": h, "recordings_sha256": recording_hashes(p, h),
+             "n_trials": sum(1 for t in trials if t.file == str(p))}
+            for p, h in ((p, sha256_of(p)) for p in paths)]
+
+
+def overlaps(paths: Sequence[Path], info: dict[str, Any]) -> list[str]:
+    """The data files the run was trained on (same SHA-256)."""
+    trained_on = {d.get("sha256") for d in info.get("data", []) if isinstance(d, dict)}
+    return [str(p) for p in paths if sha256_of(p) in trained_on]
+
+
+def write_eval(result: EvalResult, heads: Sequence[HeadSpec], ws: WindowSet,
+               decoded: dict[str, np.ndarray], scale: dict[str, tuple[float, float]], *,
+               overwrite: bool = False) -> None:
+    """Write ``result.out_dir`` atomically: metrics.json, confusion matrices (PNG, JSON)
+    and predictions.csv (one row per window)."""
     def fill(tmp: Path) -> None:
         runs.write_json(tmp / runs.METRICS_JSON, result.as_dict())
         for m in result.heads:
@@ -320,8 +418,10 @@ def _write(result: EvalResult, heads: Sequence[HeadSpec], ws: WindowSet,
                     columns += [ws.targets[h.name].astype(np.float64) * s + m, decoded[h.name]]
             w.writerows(zip(*columns, strict=True))
 
-    runs.write_folder(result.out_dir, fill, overwrite=True)
+    runs.write_folder(result.out_dir, fill, overwrite=overwrite)
 
 
 __all__ = ["ClassMetrics", "ClassificationMetrics", "EvalResult", "RegressionMetrics",
-           "classification_metrics", "evaluate", "head_metrics", "regression_metrics"]
+           "check_eval_folder", "classification_metrics", "data_records", "evaluate",
+           "head_metrics", "measure_latency_of", "overlaps", "regression_metrics",
+           "support_warnings", "write_eval"]

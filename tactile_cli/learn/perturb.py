@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import zlib
 from collections.abc import Callable, Mapping, Sequence
@@ -337,20 +336,47 @@ class PerturbResult:
 
 
 def load_perturbation(path: str | Path) -> PerturbResult:
-    """Read a perturb.json (or the folder holding it)."""
+    """Read a perturb.json (or the folder holding it), checked: strict JSON, an object of
+    format ``tactile-perturb``, every record complete and of the right type. Any problem is
+    one InputError naming the file and how to re-create it."""
+    from .runs import _parse_json
+
     path = Path(path)
     if path.is_dir():
         path = path / PERTURB_JSON
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError("no perturb.json; run `tactile perturb RUN --data FILE`",
-                         path=path) from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"perturb.json is not valid JSON ({exc})", path=path) from None
+    redo = "re-create it with `tactile perturb RUN --data FILE`"
+    if not path.is_file():
+        raise InputError(f"no perturb.json; {redo}", path=path)
+    d = _parse_json(path, redo)
+    if not isinstance(d, dict):
+        raise InputError(f"perturb.json is not a JSON object; {redo}", path=path)
     if d.get("format") != PERTURB_FORMAT:
-        raise InputError(f"format is {d.get('format')!r}, not {PERTURB_FORMAT!r}", path=path)
-    return PerturbResult.from_dict(d)
+        raise InputError(f"format is {d.get('format')!r}, not {PERTURB_FORMAT!r}; {redo}",
+                         path=path)
+    kinds = d.get("kinds")
+    if not isinstance(kinds, list) or not all(
+            isinstance(k, dict) and isinstance(k.get("levels"), list)
+            and isinstance(k.get("breaking"), list)
+            and all(isinstance(x, dict) for x in [*k["levels"], *k["breaking"]])
+            for k in kinds):
+        raise InputError(f"`kinds` must list each perturbation with its levels and breaking "
+                         f"points; {redo}", path=path)
+    try:
+        result = PerturbResult.from_dict(d)
+    except (KeyError, TypeError, ValueError) as exc:
+        what = exc.args[0] if isinstance(exc, KeyError) and exc.args else type(exc).__name__
+        raise InputError(f"perturb.json is incomplete or mistyped ({what}); {redo}",
+                         path=path) from None
+    for k in result.kinds:
+        for lv in k.levels:
+            for name in ("level", "accuracy", "macro_f1", "n_windows", "cutoff_hz"):
+                v = getattr(lv, name)
+                number = isinstance(v, int | float) and not isinstance(v, bool)
+                if not (number or (v is None and name != "level")) or (
+                        number and math.isinf(v)):
+                    raise InputError(f"kind {k.kind!r}: `{name}` (={v!r}) must be a finite "
+                                     f"number; {redo}", path=path)
+    return result
 
 
 def find_perturbations(run_dir: str | Path) -> dict[str, Path]:
@@ -517,9 +543,10 @@ def perturb_evaluate(
     """
     import time
 
-    from .data import assign_splits, check_heads_match, data_files, read_trials
+    from .data import check_heads_match, data_files, read_trials
     from .heads import primary_head
     from .inputs import checked_input, input_record
+    from .splits import held_out_trials
 
     t_start = time.perf_counter()
     run_obj = run if isinstance(run, runs.Run) else runs.load_run(run)
@@ -554,8 +581,8 @@ def perturb_evaluate(
     spec, input_notes = checked_input(trials, cfg.data.stream, run_obj.input, run_obj.path)
     check_heads_match(run_obj.heads, trials, stream=cfg.data.stream)
     if split == "test":
-        assignment = assign_splits(trials, cfg.data.split, cfg.seed)
-        trials = [trials[i] for i in assignment.indices("test")]
+        trials = held_out_trials(trials, split_csv=run_obj.path / "split.csv",
+                             split=cfg.data.split, seed=cfg.seed, targets=cfg.data.targets)
         if not trials:
             raise InputError("no trial of these files is in the test split; use `split='all'` "
                              "for data the run never saw")

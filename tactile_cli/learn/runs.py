@@ -357,8 +357,52 @@ def read_metrics(path: str | Path) -> dict[str, Any]:
     if primary is not None and primary not in heads:
         raise InputError(f"`primary_head` (={primary!r}) is not one of `heads`; {redo}",
                          path=path)
+    for name, head in heads.items():
+        _check_head_metrics(name, head, path, redo)
+    for key, fields in (("latency", ("batch1_ms_median", "batch1_ms_p95", "windows_per_s")),
+                        ("model", ("n_params", "size_mb"))):
+        value = m.get(key)
+        if value is None and key == "latency":
+            continue
+        if not isinstance(value, dict) or not all(_number_or_null(value.get(f))
+                                                  for f in fields):
+            raise InputError(f"`{key}` must hold the numbers {', '.join(fields)}; {redo}",
+                             path=path)
+    if not isinstance(m.get("n_windows"), int) or isinstance(m.get("n_windows"), bool):
+        raise InputError(f"`n_windows` must be an integer; {redo}", path=path)
     return m
 
+
+def _number_or_null(v: Any) -> bool:
+    return v is None or (isinstance(v, int | float) and not isinstance(v, bool)
+                         and not (isinstance(v, float) and math.isinf(v)))
+
+
+def _check_head_metrics(name: str, head: dict[str, Any], path: Path, redo: str) -> None:
+    """The fields of one head's metrics that compare and report read, with their types."""
+    where = f"`heads.{name}`"
+    if head["kind"] == "regression":
+        if not all(_number_or_null(head.get(k)) for k in ("mae", "rmse")):
+            raise InputError(f"{where} must hold the numbers mae and rmse; {redo}", path=path)
+        return
+    if not all(_number_or_null(head.get(k)) for k in ("accuracy", "macro_f1")):
+        raise InputError(f"{where}: `accuracy` and `macro_f1` must be numbers; {redo}",
+                         path=path)
+    per_class = head.get("per_class")
+    if not isinstance(per_class, list) or not all(
+            isinstance(c, dict) and isinstance(c.get("name"), str)
+            and all(_number_or_null(c.get(k)) for k in ("precision", "recall", "f1"))
+            and isinstance(c.get("support", 0), int) for c in per_class):
+        raise InputError(f"{where}: `per_class` must list the name, f1 (and precision, "
+                         f"recall, support) of every class; {redo}", path=path)
+    cm = head.get("confusion_matrix")
+    k = len(per_class)
+    if cm is not None and (not isinstance(cm, list) or len(cm) != k or not all(
+            isinstance(r, list) and len(r) == k and all(
+                isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in r)
+            for r in cm)):
+        raise InputError(f"{where}: `confusion_matrix` must be {k} x {k} counts; {redo}",
+                         path=path)
 
 def load_run(path: str | Path) -> Run:
     """Read a run folder, checking every file before use (format and version, keys and their
@@ -366,6 +410,9 @@ def load_run(path: str | Path) -> Run:
     path = _run_folder(path)
     info_path = path / RUN_JSON
     info = read_run_info(path)
+    if info.get("cv") is not None:
+        raise InputError("a cross-validated run holds one model per fold; give a fold's "
+                         "folder (RUN/folds/fold_00, ...) for a single model", path=path)
     config = read_run_config(path)
     norm = _normalisation(_read_json(path / NORMALISATION_JSON, path),
                           list(config.data.channels), path / NORMALISATION_JSON)

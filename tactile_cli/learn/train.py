@@ -16,7 +16,7 @@ import csv
 import math
 import platform
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -35,22 +35,22 @@ from . import runs
 from .config import TrainConfig
 from .data import (
     Normalisation,
-    SplitAssignment,
     TrialSeries,
     WindowSet,
-    assign_splits,
     class_weights,
     data_files,
     fit_normalisation,
     make_windows,
     read_trials,
     regression_stats,
+    resolve_channels,
     resolve_heads,
 )
 from .figures import plot_curves
 from .heads import HeadSpec, primary_head
 from .inputs import InputSpec, input_spec
 from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
+from .splits import SplitAssignment, assign_splits, default_by, split_from_mapping
 
 
 @dataclass(frozen=True)
@@ -101,6 +101,7 @@ class TrainResult:
     best_val_loss: float
     best_val_accuracy: float
     heads: list[HeadSpec] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -125,13 +126,31 @@ def deterministic(seed: int, threads: int) -> Iterator[None]:
         torch.set_num_threads(previous[1])
 
 
-def prepare(config: TrainConfig, data_paths: Sequence[Path]) -> Prepared:
+@dataclass(frozen=True)
+class GivenSplits:
+    """Splits decided outside the config: ``mapping`` is ``file name/trial`` (or a trial
+    name unique in the data) -> train/val/test; ``source`` names where they come from (a
+    ``--split-from`` CSV, a cross-validation fold), ``mode`` how run.json records them."""
+
+    mapping: Mapping[str, str]
+    source: str
+    mode: str = "given"
+
+
+def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
+            given: GivenSplits | None = None) -> Prepared:
     """Read, split, normalise (training split only) and window the training data; every
-    trial must have the same sample period (within 0.1 %) and channel units."""
+    trial must have the same sample period (within 0.1 %) and channel units. ``given``:
+    splits from outside the config (else the config's ``data.split`` rule)."""
     d = config.data
     trials = read_trials(data_paths, d)
     spec = input_spec(trials, d.stream)
-    assignment = assign_splits(trials, d.split, config.seed)
+    if given is not None:
+        assignment = split_from_mapping(trials, given.mapping, source=given.source,
+                                        mode=given.mode)
+    else:
+        assignment = assign_splits(trials, d.split, config.seed,
+                                   by=default_by(d.split, d.targets))
     heads = resolve_heads(d.targets, trials)
     by_split = {s: [trials[i] for i in assignment.indices(s)] for s in ("train", "val", "test")}
     if not by_split["train"]:
@@ -215,11 +234,15 @@ def train(
     command: str | None = None,
     on_epoch: Callable[[EpochRecord], None] | None = None,
     on_start: Callable[[Prepared], None] | None = None,
+    given: GivenSplits | None = None,
 ) -> TrainResult:
     """Train ``config`` on ``data_paths`` and write the run folder ``out``.
 
     ``on_start`` is called once the data are ready, ``on_epoch`` after every epoch (for
-    progress display). Returns the summary; raises :class:`InputError` for bad data.
+    progress display); ``given``: splits from a CSV or a cross-validation fold instead of
+    the config's rule. Channel patterns of the config (``ele*``) are resolved against the
+    data and the resolved names saved. Returns the summary; raises :class:`InputError` for
+    bad data.
     """
     started = time.perf_counter()
     out = Path(out)
@@ -227,10 +250,11 @@ def train(
         raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
     check_output_folder(out, overwrite=overwrite)  # a file at `out` or a parent: before work
     paths = data_files(data_paths)
+    config = config.model_copy(update={"data": resolve_channels(config.data, paths)})
     opt_cfg = config.optim
     threads = opt_cfg.threads
     with deterministic(config.seed, threads):
-        prep = prepare(config, paths)
+        prep = prepare(config, paths, given=given)
         if on_start is not None:
             on_start(prep)
         d = config.data
@@ -330,7 +354,10 @@ def train(
         "input": prep.input.as_dict(),
         "class_weights": None if weights is None else {k: v.tolist()
                                                        for k, v in weights.items()},
-        "split": {"mode": prep.assignment.mode, "trials": n_trials, "windows": n_windows},
+        "split": {"mode": prep.assignment.mode, "by": prep.assignment.by,
+                  "source": None if given is None else given.source,
+                  "trials": n_trials, "windows": n_windows,
+                  "warnings": list(prep.assignment.warnings)},
         "model": {"family": config.model.family, "n_params": n_params, "size_mb": size_mb,
                   "window": d.window, "channels": list(d.channels), "stream": d.stream},
         "training": {"epochs_run": len(history), "best_epoch": best_epoch,
@@ -366,8 +393,9 @@ def train(
         wall_time_s=float(info["wall_time_s"]), train_time_s=train_time, threads=threads,
         n_trials=n_trials, n_windows=n_windows, best_val_loss=best.val_loss,
         best_val_accuracy=best.val_accuracy, heads=prep.heads,
+        warnings=list(prep.assignment.warnings),
     )
 
 
-__all__ = ["EpochRecord", "Prepared", "TrainResult", "batch_targets", "deterministic",
-           "predict", "prepare", "train"]
+__all__ = ["EpochRecord", "GivenSplits", "Prepared", "TrainResult", "batch_targets",
+           "deterministic", "predict", "prepare", "train"]

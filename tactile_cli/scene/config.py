@@ -24,7 +24,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..config_file import key_line, read_yaml
+from ..config_file import read_yaml, validation_error
 from ..errors import InputError
 from ..vocabulary import BIN_S
 
@@ -339,13 +339,7 @@ def load_scene_config(path: str | Path) -> SceneConfig:
     try:
         return SceneConfig.model_validate(raw)
     except ValidationError as exc:
-        errors = exc.errors()
-        # an unknown key first: a misspelt key also leaves the intended one at its default
-        err = max(errors, key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
-        keys = tuple(part for part in err["loc"] if isinstance(part, str | int))
-        line = key_line(text, keys)
-        raise InputError(_describe(err), path=path,
-                         where=None if line is None else f"line {line}") from None
+        raise validation_error(exc, text, path, describe=_describe) from None
 
 
 def _describe(err: dict[str, Any]) -> str:

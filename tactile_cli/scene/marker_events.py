@@ -11,7 +11,9 @@ counting noise and uniform background events, and land on strips and markers of 
 - ``<trial>.npy``: (n,) structured events ``t`` int64 us from the trial start, ``x``/``y``
   uint16 px, ``p`` int8 -1/+1, sorted by ``t`` (``tactile ingest`` reads it);
 - ``trials.csv``: one row of ground truth per trial (FOS parameters, timeline,
-  saturation limit, slip speed in m/s and px/s, event counts);
+  saturation limit, slip speed in m/s and px/s, event counts) and where it comes from
+  (``origin`` = simulated, ``dataset`` = ``marker-events seed <seed>``: the labels of
+  :mod:`tactile_cli.store.origin` once ingested with ``--trial-labels``);
 - ``annotations.csv``: ``trial,start_s,end_s,label``, the four action regions per trial;
 - ``scene.json``: resolved config, seed, tool version, command, sensor geometry and ROIs.
 
@@ -38,6 +40,7 @@ from .._version import __version__
 from ..errors import InputError
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
+from ..store.origin import DATASET_LABEL, ORIGIN_LABEL
 from ..store.outdir import check_output_folder, output_folder
 from ..store.writer import current_command
 from .config import SceneConfig
@@ -48,6 +51,10 @@ from .trials import SceneTrial, draw_trial, expected_rates, trial_rng
 #: Columns of trials.csv after the ground truth of :meth:`SceneTrial.row`.
 COUNT_COLUMNS = ("n_events", "n_positive", "n_negative", "n_background")
 ANNOTATION_COLUMNS = ("trial", "start_s", "end_s", "label")
+#: The value of the trial label ``origin`` (see :mod:`tactile_cli.store.origin`) and the
+#: name that the ``dataset`` label of a scene's trials starts with.
+ORIGIN = "simulated"
+DATASET = "marker-events"
 SCENE_FORMAT = "tactile-marker-events"
 SCENE_FORMAT_VERSION = 1
 
@@ -135,7 +142,7 @@ def simulate_marker_events(
                 written.append(SimulatedTrial(trial, drawn.n_events, drawn.n_positive,
                                               drawn.n_negative, drawn.n_background))
                 progress.advance(1)
-            _write_text(tmp / "trials.csv", _trials_csv(written))
+            _write_text(tmp / "trials.csv", _trials_csv(written, seed))
             _write_text(tmp / "annotations.csv", _annotations_csv([w.trial for w in written]))
             scene = _scene_json(config, layout, seed,
                                 command if command is not None else current_command(), written)
@@ -181,8 +188,10 @@ def _table(columns: Sequence[str], rows: Sequence[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def _trials_csv(written: Sequence[SimulatedTrial]) -> str:
-    rows = [w.row() for w in written]
+def _trials_csv(written: Sequence[SimulatedTrial], seed: int) -> str:
+    """The ground truth of every trial, and its origin and data set as the last columns."""
+    rows = [{**w.row(), ORIGIN_LABEL: ORIGIN, DATASET_LABEL: f"{DATASET} seed {seed}"}
+            for w in written]
     return _table(list(rows[0]) if rows else [], rows)
 
 

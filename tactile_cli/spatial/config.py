@@ -24,6 +24,7 @@ required key is one :class:`InputError` naming the file and the key.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,10 @@ from .optics import StripOptics
 from .roi import POLARITIES, Roi
 
 CONFIG_VERSION = 1
+#: Largest pixel coordinate or sensor size accepted (event coordinates are 16-bit).
+MAX_PX = 65_535
+#: Largest optical length accepted, m (a strip 10 m from a fingertip camera is a typo).
+MAX_OPTICS_M = 10.0
 
 
 @dataclass(frozen=True)
@@ -135,16 +140,24 @@ class _Checker:
         return value
 
     def number(self, value: Any, key: str, *, positive: bool = True,
-               allow_zero: bool = False) -> float:
+               allow_zero: bool = False, maximum: float = 3600.0) -> float:
+        """A finite number, > 0 (or >= 0) and at most ``maximum`` (far above any real
+        value: a typo with six extra zeros is an error, not an allocation)."""
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(f"`{key}` must be a number (got {value!r})")
+        if not math.isfinite(value):
+            raise self.fail(f"`{key}` must be finite (got {value!r})")
         if positive and not (value > 0 or (allow_zero and value == 0)):
             raise self.fail(f"`{key}` must be {'>= 0' if allow_zero else '> 0'} (got {value!r})")
+        if value > maximum:
+            raise self.fail(f"`{key}` (={value!r}) is absurdly large: at most {maximum:g}")
         return float(value)
 
-    def integer(self, value: Any, key: str) -> int:
+    def integer(self, value: Any, key: str, *, maximum: int = MAX_PX) -> int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.fail(f"`{key}` must be a whole number of px (got {value!r})")
+        if value > maximum:
+            raise self.fail(f"`{key}` (={value!r}) is absurdly large: at most {maximum:,} px")
         return int(value)
 
 
@@ -163,7 +176,8 @@ def config_from_mapping(raw: Any, *, path: str | Path = "<config>") -> SpatialCo
     optics = None
     if raw.get("optics") is not None:
         o = c.mapping(raw["optics"], "optics", _OPTICS_KEYS, required=_OPTICS_KEYS)
-        optics = StripOptics(*(c.number(o[k], f"optics.{k}") for k in _OPTICS_KEYS))
+        optics = StripOptics(*(c.number(o[k], f"optics.{k}", maximum=MAX_OPTICS_M)
+                               for k in _OPTICS_KEYS))
     if "rois" in raw and (not isinstance(raw["rois"], list) or not raw["rois"]):
         raise c.fail("`rois` must be a non-empty list of {name, x0, y0, x1, y1}")
     rois = []
@@ -190,7 +204,7 @@ def config_from_mapping(raw: Any, *, path: str | Path = "<config>") -> SpatialCo
         if polarity not in POLARITIES:
             raise c.fail(f"`centroid.polarity` is {polarity!r}; use one of "
                          f"{', '.join(POLARITIES)}")
-        median = c.integer(m.get("median", centroid.median), "centroid.median")
+        median = c.integer(m.get("median", centroid.median), "centroid.median", maximum=101)
         try:
             _check_median(median)
         except ValueError as exc:
@@ -203,9 +217,11 @@ def config_from_mapping(raw: Any, *, path: str | Path = "<config>") -> SpatialCo
             raise c.fail("`centroid.background: approach` needs `centroid.median: 1` (the "
                          "median filter already removes isolated background events); set "
                          "`background: none`")
-        centroid = CentroidOptions(polarity, median,
-                                   c.number(m.get("bin_s", centroid.bin_s), "centroid.bin_s"),
-                                   background)
+        bin_s = c.number(m.get("bin_s", centroid.bin_s), "centroid.bin_s")
+        if bin_s < 1e-6:
+            raise c.fail(f"`centroid.bin_s` (={bin_s!r}) must be at least 1e-6 s: event times "
+                         "are whole microseconds")
+        centroid = CentroidOptions(polarity, median, bin_s, background)
     slip = SlipOptions()
     if raw.get("slip") is not None:
         m = c.mapping(raw["slip"], "slip", _SLIP_KEYS)

@@ -1,4 +1,10 @@
-"""Read tactile HDF5 files: version gate, trial listing and the summary behind `tactile info`."""
+"""Read tactile HDF5 files: version gate, trial listing and the summary behind `tactile info`.
+
+The summary says what a user needs to write a train config: each sensor's streams, rate,
+channel names and units, the trial labels (trials per value) and per-sample labels
+(samples per class), the splits; labels with many values are summarised
+(:mod:`tactile_cli.store.labels`).
+"""
 
 from __future__ import annotations
 
@@ -11,29 +17,51 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
-from .trials import TactileFile, _flat, _reading, attr_value
-from .validate import check_readable
+from ..natural import natural_key
+from .labels import LabelCounts, SampleLabelTally, count_trial_labels
+from .trials import TactileFile, _reading, attr_value, open_checked
+
+#: Channel names listed in full up to this many; a longer list is shown as its first
+#: :data:`CHANNELS_HEAD` names, ``..``, the last name and the count.
+MAX_CHANNELS_LISTED = 6
+CHANNELS_HEAD = 3
 
 
 def open_tactile(path: str | Path) -> h5py.File:
     """Open a tactile HDF5 file for reading after the schema version gate
     (:func:`~tactile_cli.store.validate.check_readable`); a file HDF5 cannot open is one
-    :class:`InputError` line naming it. Use as a context manager."""
-    try:
-        check_readable(path)
-        return h5py.File(path, "r")
-    except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"not a readable HDF5 file ({_flat(exc)})", path=Path(path)) from None
+    :class:`InputError` line naming it (:func:`~tactile_cli.store.trials.open_checked`).
+    Use as a context manager."""
+    return open_checked(Path(path))[1]
+
+
+def brief_names(names: list[str]) -> str:
+    """``a, b, c`` for a few names; ``txl1_x, txl1_y, txl1_z .. txl16_z (48)`` for many."""
+    if len(names) <= MAX_CHANNELS_LISTED:
+        return ", ".join(names)
+    return f"{', '.join(names[:CHANNELS_HEAD])} .. {names[-1]} ({len(names)})"
 
 
 @dataclass
 class SensorInfo:
+    """One sensor: units are the distinct channel units (sorted); channel_names and
+    channel_units one per channel; streams: the stream names it records, over all trials
+    (what a train config names in ``data.stream``)."""
+
     name: str
     kind: str
     sample_rate_hz: float
     n_channels: int
     geometry: str
     units: list[str]
+    channel_names: list[str] = field(default_factory=list)
+    channel_units: list[str] = field(default_factory=list)
+    streams: list[str] = field(default_factory=list)
+
+    @property
+    def channels_brief(self) -> str:
+        """The channel names, abbreviated when there are many (:func:`brief_names`)."""
+        return brief_names(self.channel_names)
 
 
 @dataclass
@@ -45,6 +73,7 @@ class TrialInfo:
     n_events: int
     streams: dict[str, list[int]]  # stream -> [n_samples, n_channels]
     n_frames: int
+    n_annotations: int = 0  # time-interval annotations (AEDAT4 triggers among them)
 
 
 @dataclass
@@ -59,14 +88,24 @@ class FileSummary:
     n_sources: int
     sensors: list[SensorInfo] = field(default_factory=list)
     trials: list[TrialInfo] = field(default_factory=list)
+    sample_labels: list[LabelCounts] = field(default_factory=list)
+
+    @property
+    def trial_labels(self) -> list[LabelCounts]:
+        """Every trial label counted in trials per value (natural order)."""
+        return count_trial_labels([t.labels for t in self.trials])
 
     @property
     def label_counts(self) -> dict[str, dict[str, int]]:
-        counts: dict[str, Counter[str]] = {}
-        for trial in self.trials:
-            for key, value in trial.labels.items():
-                counts.setdefault(key, Counter())[str(value)] += 1
-        return {k: dict(sorted(v.items())) for k, v in sorted(counts.items())}
+        """label -> value -> trials, every value (natural order)."""
+        return {lc.name: dict(lc.counts or {}) for lc in self.trial_labels}
+
+    @property
+    def splits(self) -> dict[str, int]:
+        """split -> trials (``""``: not assigned), in the order train, val, test, ``""``."""
+        counts = Counter(t.split for t in self.trials)
+        order = {"train": 0, "val": 1, "test": 2, "": 4}
+        return {k: counts[k] for k in sorted(counts, key=lambda k: (order.get(k, 3), k))}
 
     @property
     def total_duration_s(self) -> float:
@@ -75,6 +114,8 @@ class FileSummary:
     def as_dict(self) -> dict[str, Any]:
         out = asdict(self)
         out["label_counts"] = self.label_counts
+        out["trial_labels"] = [asdict(lc) for lc in self.trial_labels]
+        out["splits"] = self.splits
         out["total_duration_s"] = self.total_duration_s
         return out
 
@@ -112,11 +153,19 @@ def summarize(path: str | Path) -> FileSummary:
             summary.sensors.append(
                 SensorInfo(name, sensor.kind, sensor.sample_rate_hz,
                            len(sensor.channel_names), geometry,
-                           sorted(set(sensor.channel_units)))
+                           sorted(set(sensor.channel_units)),
+                           channel_names=list(sensor.channel_names),
+                           channel_units=list(sensor.channel_units))
             )
+        by_name = {s.name: s for s in summary.sensors}
+        tally = SampleLabelTally()
         for trial in f.trials():
             streams = {}
             for s_name in trial.signal_names:
+                sensor_info = by_name.get(trial.signal_sensor(s_name).name)
+                if sensor_info is not None and s_name not in sensor_info.streams:
+                    sensor_info.streams.append(s_name)
+                tally.add(s_name, trial.sample_labels(s_name))
                 where = f"{trial.where}/signals/{s_name}/data"
                 with _reading(f.path, where):
                     shape = list(trial._group["signals"][s_name]["data"].shape)
@@ -129,6 +178,8 @@ def summarize(path: str | Path) -> FileSummary:
                 g = trial._group
                 n_events = int(g["events/t"].shape[0]) if "events" in g else 0
                 n_frames = int(g["frames/images"].shape[0]) if "frames" in g else 0
+                n_annotations = (int(g["annotations/start_s"].shape[0])
+                                 if "annotations/start_s" in g else 0)
             summary.trials.append(
                 TrialInfo(
                     name=trial.name,
@@ -138,8 +189,12 @@ def summarize(path: str | Path) -> FileSummary:
                     n_events=n_events,
                     streams=streams,
                     n_frames=n_frames,
+                    n_annotations=n_annotations,
                 )
             )
+    for s in summary.sensors:
+        s.streams.sort(key=natural_key)
+    summary.sample_labels = tally.result()
     return summary
 
 

@@ -25,6 +25,7 @@ annotations that end before they start. The message names the HDF5 path and poin
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -599,6 +600,19 @@ class Trial:
                              f"{', '.join(self.signal_names) or 'none'})",
                              path=self.path, where=self.where)
 
+    def sample_labels(self, name: str) -> dict[str, SampleLabel]:
+        """The per-sample labels of stream ``name`` without its samples: label name ->
+        :class:`SampleLabel` (all samples). InputError naming the dataset when one is not
+        a 1-D dataset of numbers or holds a class code outside its classes."""
+        self._require_signal(name)
+        where = f"{self.where}/signals/{name}"
+        with _reading(self.path, where):
+            labels = _read_sample_labels(self.path, where, self._group["signals"][name],
+                                         slice(None))
+        for key, lab in labels.items():
+            _check_codes(self.path, f"{where}/sample_labels/{key}", lab)
+        return labels
+
     def signal(self, name: str, *, channels: Sequence[str] | None = None,
                rows: slice | None = None) -> Signal:
         """Stream ``name``: its samples (all channels, or the named ``channels`` in that
@@ -619,17 +633,7 @@ class Trial:
             data = group["data"][rows]
             t_s = np.asarray(group["t_s"][rows], dtype=np.float64)
             attrs = {k: attr_value(v) for k, v in group.attrs.items()}
-            labels: dict[str, SampleLabel] = {}
-            if "sample_labels" in group:
-                for key, ds in group["sample_labels"].items():
-                    lwhere = f"{where}/sample_labels/{key}"
-                    if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf" \
-                            or ds.ndim != 1:
-                        raise _content_error(self.path, lwhere, "expected a 1-D dataset of "
-                                             "numbers")
-                    classes = (_class_names(self.path, lwhere, ds.attrs["classes"])
-                               if "classes" in ds.attrs else None)
-                    labels[key] = SampleLabel(ds[rows], classes)
+            labels = _read_sample_labels(self.path, where, group, rows)
         if data.ndim != 2:
             raise InputError(f"data has shape {data.shape}; expected (n_samples, n_channels)",
                              path=self.path, where=f"{where}/data")
@@ -683,6 +687,36 @@ def _class_names(path: Path, where: str, value: Any) -> tuple[str, ...]:
     return tuple(names)
 
 
+def _read_sample_labels(path: Path, where: str, group: h5py.Group,
+                        rows: slice) -> dict[str, SampleLabel]:
+    """The ``sample_labels`` of the stream group ``group`` at ``where`` (rows ``rows``);
+    call inside :func:`_reading`."""
+    labels: dict[str, SampleLabel] = {}
+    if "sample_labels" not in group:
+        return labels
+    for key, ds in group["sample_labels"].items():
+        lwhere = f"{where}/sample_labels/{key}"
+        if not isinstance(ds, h5py.Dataset) or ds.dtype.kind not in "iuf" or ds.ndim != 1:
+            raise _content_error(path, lwhere, "expected a 1-D dataset of numbers")
+        classes = (_class_names(path, lwhere, ds.attrs["classes"])
+                   if "classes" in ds.attrs else None)
+        labels[key] = SampleLabel(ds[rows], classes)
+    return labels
+
+
+def _check_codes(path: Path, where: str, label: SampleLabel) -> None:
+    """Class codes inside their classes (-1: unlabelled); numeric labels pass."""
+    if label.classes is None:
+        return
+    v = np.asarray(label.values)
+    k = len(label.classes)
+    bad = ((v != np.round(v)) | (v < -1) | (v >= k))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise _content_error(path, where, f"sample {i} has class code {v[i].item()!r}; codes "
+                             f"are 0..{k - 1} of its {k} classes, or -1 (unlabelled)")
+
+
 def _check_samples(path: Path, where: str, data: np.ndarray, t_s: np.ndarray,
                    labels: dict[str, SampleLabel]) -> None:
     """A stream's samples as the schema has them: one time per row, finite data, a strictly
@@ -709,14 +743,7 @@ def _check_samples(path: Path, where: str, data: np.ndarray, t_s: np.ndarray,
         if v.shape[0] != data.shape[0]:
             raise _content_error(path, f"{where}/sample_labels/{key}", f"has {v.shape[0]} "
                                  f"values; the stream has {data.shape[0]} samples")
-        if lab.classes is not None:
-            k = len(lab.classes)
-            bad = ((v != np.round(v)) | (v < -1) | (v >= k))
-            if bad.any():
-                i = int(np.flatnonzero(bad)[0])
-                raise _content_error(path, f"{where}/sample_labels/{key}",
-                                     f"sample {i} has class code {v[i].item()!r}; codes are 0.."
-                                     f"{k - 1} of its {k} classes, or -1 (unlabelled)")
+        _check_codes(path, f"{where}/sample_labels/{key}", lab)
 
 
 @dataclass(frozen=True)
@@ -747,18 +774,7 @@ class TactileFile:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
-        if not self.path.exists():
-            if self.path.is_symlink():
-                raise InputError("is a symbolic link that does not resolve (broken, or a "
-                                 "loop)", path=self.path)
-            raise InputError("file not found", path=self.path)
-        if self.path.is_dir():
-            raise InputError("is a folder, not a tactile HDF5 file", path=self.path)
-        try:
-            self.schema_version = check_readable(self.path)
-            self._h5 = h5py.File(self.path, "r")
-        except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
-            raise InputError(f"not a readable HDF5 file ({_flat(exc)})", path=self.path) from None
+        self.schema_version, self._h5 = open_checked(self.path)
         self._sensors: dict[str, Sensor] = {}
         for group in ("sensors", "trials"):  # an empty list of trials must not pass for one
             try:
@@ -897,6 +913,68 @@ class TactileFile:
         return Derived(where, cols, attrs)
 
 
+def open_checked(path: Path) -> tuple[str, h5py.File]:
+    """(schema version, open h5py file) of a tactile file, after the version gate; a path
+    that is missing, a folder, not HDF5 or damaged is one :class:`InputError` saying what
+    to do (see :func:`unreadable_error`)."""
+    if not path.exists():
+        if path.is_symlink():
+            raise InputError("is a symbolic link that does not resolve (broken, or a loop)",
+                             path=path)
+        raise InputError("file not found", path=path)
+    if path.is_dir():
+        raise folder_error(path)
+    try:
+        version = check_readable(path)
+        return version, h5py.File(path, "r")
+    except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
+        raise unreadable_error(path, exc) from None
+
+
+#: Suffixes of raw recordings that `tactile ingest` converts, and what a file of each is.
+_RAW_SUFFIXES = {".aedat4": "an AEDAT4 recording", ".csv": "a CSV table",
+                 ".npy": "a NumPy array"}
+#: Parts of an HDF5 library message that name its C internals (``sblock->base_addr = 0``).
+_C_DETAIL = re.compile(r",?\s*[\w.]*(->|addr)[\w.>-]*\s*=\s*\w+")
+
+
+def folder_error(path: Path) -> InputError:
+    """The error for a folder given where a tactile HDF5 file is expected: names the .h5
+    files inside it, or the command that makes one from the recordings in it."""
+    h5_files = sorted(p.name for p in path.iterdir()
+                      if p.suffix.lower() in (".h5", ".hdf5") and not p.name.startswith("."))
+    if h5_files:
+        shown = ", ".join(h5_files[:3]) + (", ..." if len(h5_files) > 3 else "")
+        return InputError(f"is a folder, not a tactile HDF5 file; give one of the files in it "
+                          f"({shown})", path=path)
+    return InputError("is a folder, not a tactile HDF5 file; make one from the recordings in "
+                      f"it with `tactile ingest {path} --out FILE.h5`", path=path)
+
+
+def unreadable_error(path: Path, exc: BaseException) -> InputError:
+    """One line for a file the HDF5 library cannot open, without its C details: not HDF5
+    at all (a raw recording, say), cut short, or damaged; each says what to do."""
+    detail = _flat(exc)
+    if path.is_file() and path.stat().st_size == 0:
+        return InputError("not a readable HDF5 file (the file is empty); write it again with "
+                          "the command that made it", path=path)
+    if not is_hdf5(path):
+        raw = _RAW_SUFFIXES.get(path.suffix.lower())
+        if raw is not None:
+            return InputError(f"not a readable HDF5 file (no HDF5 signature: {raw}); convert "
+                              f"it with `tactile ingest {path} --out FILE.h5` and give that "
+                              "file", path=path)
+        return InputError("not a readable HDF5 file (no HDF5 signature: another format, or a "
+                          "damaged file); give a file that `tactile ingest` wrote", path=path)
+    cut = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", detail)
+    if cut:
+        return InputError(f"not a readable HDF5 file (cut short: {int(cut[1]):,} of "
+                          f"{int(cut[2]):,} bytes); copy it again, or write it again with the "
+                          "command that made it", path=path)
+    return InputError(f"not a readable HDF5 file (damaged: {_C_DETAIL.sub('', detail)}); copy "
+                      "it again, or write it again with the command that made it", path=path)
+
+
 def open_file(path: str | Path) -> TactileFile:
     """Open a tactile HDF5 file for reading (see :class:`TactileFile`)."""
     return TactileFile(path)
@@ -912,4 +990,5 @@ def is_hdf5(path: str | Path) -> bool:
 
 __all__ = ["READ_BLOCK", "Annotation", "Derived", "EventWindow", "Frames", "SampleLabel",
            "Sensor", "Signal", "Source", "TactileFile", "Trial", "TrialEvents", "attr_value",
-           "is_hdf5", "open_file", "unknown_trial"]
+           "folder_error", "is_hdf5", "open_checked", "open_file", "unknown_trial",
+           "unreadable_error"]

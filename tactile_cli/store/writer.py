@@ -409,6 +409,19 @@ class TrialWriter:
         return {k: attr_value(v) for k, v in self.group["labels"].attrs.items()}
 
     @property
+    def split(self) -> str:
+        """The trial's split so far: ``"train"``, ``"val"``, ``"test"`` or ``""`` (none)."""
+        return str(attr_value(self.group.attrs.get("split", "")))
+
+    def set_split(self, split: str) -> None:
+        """Assign the trial to a split (the group attribute ``split``): one of the schema's
+        values train, val, test, or ``""`` for none; ValueError for anything else."""
+        allowed = load_spec().enums["split"]
+        if split not in allowed:
+            raise ValueError(f"split {split!r} is not one of {', '.join(map(repr, allowed))}")
+        self.group.attrs["split"] = split
+
+    @property
     def has_annotations(self) -> bool:
         """Whether the trial's annotations were written (they are written once)."""
         return "annotations" in self.group

@@ -86,8 +86,16 @@ def synthesize(
     path = write_synth(out, trials, n=n, bin_s=config.bin_s, width_px=config.width_px,
                        height_px=config.height_px, provenance=provenance, fits_path=fits,
                        command=command, overwrite=overwrite, progress=progress,
-                       centroids=model, centroids_path=centroids)
+                       centroids=model, centroids_path=centroids,
+                       dataset=synth_dataset(seed, fits))
     return SynthResult(path=path, n=n, press=press, slip=slip)
+
+
+def synth_dataset(seed: int, fits: str | Path | None) -> str:
+    """The ``dataset`` label of synthetic trials: ``synth seed 1 from the fits of scene.h5``
+    or ``synth seed 1 from the config's FOS values``."""
+    source = "the config's FOS values" if fits is None else f"the fits of {Path(fits).name}"
+    return f"synth seed {seed} from {source}"
 
 
 def centroid_model(rois: str | Path, config: SynthConfig) -> CentroidModel:
@@ -117,4 +125,4 @@ def centroid_model(rois: str | Path, config: SynthConfig) -> CentroidModel:
 __all__ = ["CentroidModel", "CentroidTrajectory", "LevelDistribution", "SynthConfig",
            "SynthResult", "SynthTrial", "centroid_model", "draw_centroids", "draw_trial",
            "from_config", "from_fits", "generate_trials", "load_synth_config",
-           "noisy_net_counts", "synthesize", "write_synth"]
+           "noisy_net_counts", "synth_dataset", "synthesize", "write_synth"]

@@ -15,7 +15,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_file import key_line, read_yaml
+from ..config_file import read_yaml, validation_error
 from ..errors import InputError
 from ..vocabulary import BIN_S
 
@@ -259,11 +259,7 @@ def load_synth_config(path: str | Path | None) -> SynthConfig:
     try:
         return SynthConfig.model_validate(raw)
     except ValidationError as exc:
-        err = max(exc.errors(), key=lambda e: (e["type"] == "extra_forbidden", len(e["loc"])))
-        keys = tuple(p for p in err["loc"] if isinstance(p, str | int))
-        line = key_line(text, keys)
-        raise InputError(_describe(err), path=path,
-                         where=None if line is None else f"line {line}") from None
+        raise validation_error(exc, text, path, describe=_describe) from None
 
 
 def _describe(err: dict[str, Any]) -> str:

@@ -4,9 +4,10 @@ Layout: sensor ``event_counts`` (kind ``event_camera``, the configured geometry,
 ``net`` in events/bin, ``sample_rate_hz = 1/bin_s``, attribute ``bin_s``); per trial
 ``/trials/synth_00000/signals/event_counts`` with ``data`` (n_bins, 1) float32 net counts,
 ``t_s`` the bin centres and ``sample_labels/action`` (int8, attribute ``classes`` =
-approach, press, slip, release); the labels ``force_level``, ``force_grade`` and every
-sampled parameter; the four action regions as annotations. Provenance: the fits file as
-the source of every trial, and the resolved config, seed, n and the distributions drawn
+approach, press, slip, release); the labels ``force_level``, ``force_grade``, every
+sampled parameter, ``origin`` = synthetic and ``dataset`` (see
+:mod:`tactile_cli.store.origin`); the four action regions as annotations. Provenance: the
+fits file as the source of every trial, and the resolved config, seed, n and the distributions drawn
 from in the root's ``config_json``.
 
 With ``centroids`` (``tactile synth --centroids ROIS``) every trial also has the stream
@@ -23,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from ..progress import NullProgress, Progress
+from ..store.origin import DATASET_LABEL, ORIGIN_LABEL
 from ..store.writer import StoreWriter
 from ..vocabulary import ACTIONS
 from .centroids import CentroidModel
@@ -30,6 +32,8 @@ from .trajectories import SynthTrial
 
 SENSOR = "event_counts"
 STREAM = "event_counts"
+#: The trial label ``origin`` of every synthetic trial.
+ORIGIN = "synthetic"
 
 
 def write_synth(
@@ -47,6 +51,7 @@ def write_synth(
     progress: Progress | None = None,
     centroids: CentroidModel | None = None,
     centroids_path: str | Path | None = None,
+    dataset: str = "synth",
 ) -> Path:
     """Write ``trials`` (``n`` of them, for the progress bar) to ``out``, atomically.
 
@@ -78,7 +83,8 @@ def write_synth(
                             "centre and flagged where the ROI had no events")
         progress.start(n, "synthesising trials")
         for trial in trials:
-            tw = w.trial(trial.name, labels=trial.label_attrs(), sources=sources,
+            labels = {**trial.label_attrs(), ORIGIN_LABEL: ORIGIN, DATASET_LABEL: dataset}
+            tw = w.trial(trial.name, labels=labels, sources=sources,
                          annotations=trial.timeline.intervals())
             tw.write_signal(STREAM, sensor=sensor, data=trial.net[:, None], t_s=trial.t_s,
                             sample_labels={"action": (trial.labels, ACTIONS)})
@@ -104,4 +110,4 @@ def _write_centroids(tw: Any, sensor: str, trial: SynthTrial, model: CentroidMod
                     sample_labels={"action": (trial.labels, ACTIONS)})
 
 
-__all__ = ["SENSOR", "STREAM", "write_synth"]
+__all__ = ["ORIGIN", "SENSOR", "STREAM", "write_synth"]

@@ -324,3 +324,102 @@ def test_gauss_newton_option_agrees_and_flags_what_it_cannot_reach():
                     keep_failed=True)
     assert (~far.ok).any()  # undamped steps from 100x off: LM converges, GN cannot
     assert np.all(within(far.tau_s, d["tau"]) | ~far.ok)
+
+
+# ---------------------------------------------------------------------------- one program
+def test_the_compiled_solver_matches_the_models_and_autodiff():
+    """The solver's written-out first-order Jacobian equals autodiff of the projected
+    residual, and its second-order basis equals :func:`second_order_basis` (all kinds)."""
+    import jax.numpy as jnp
+
+    from tactile_cli.fos import solver
+    from tactile_cli.fos.models import second_order_basis, unit_response
+
+    rng = np.random.default_rng(21)
+    t = np.arange(100) * DT_S + 0.01
+    y = rng.poisson(1000.0, 100).astype(float)
+    m = (np.arange(100) < 90).astype(float)
+    with jax.enable_x64(True):
+        for kind, fit_t, dur in (("pulse", False, 0.73), ("pulse", True, np.inf),
+                                 ("step", False, np.inf), ("ramp", False, np.inf)):
+            flags = solver.Flags(jnp.bool_(kind == "ramp"), jnp.bool_(False), jnp.bool_(fit_t))
+            theta = jnp.array([np.log(0.3), 0.0, np.log(0.71)])
+            args = (jnp.asarray(t), jnp.asarray(y), jnp.asarray(m), jnp.asarray(dur), 1e-3,
+                    theta, flags)
+            value, rows = solver._first_value_and_jacobian(theta, args)
+
+            def reference(th, kind=kind, fit_t=fit_t, dur=dur):
+                tau, big_t = jnp.exp(th[0]), (jnp.exp(th[2]) if fit_t else dur)
+                b = unit_response("ramp" if kind == "ramp" else "pulse", jnp.asarray(t), tau,
+                                  None if kind == "ramp" else big_t)
+                g = jnp.sum(m * b * y) / jnp.sum(m * b * b)
+                return (y - g * b) * m * 1e-3
+
+            np.testing.assert_allclose(value, reference(theta), atol=1e-12)
+            np.testing.assert_allclose(rows.T, jax.jacfwd(reference)(theta), atol=1e-12)
+        for kind in ("pulse", "step", "ramp"):
+            for zeta in (0.4, 1.0, 1.7):
+                b = solver._second_basis(jnp.asarray(t), 0.2, zeta,
+                                         0.73 if kind == "pulse" else np.inf, kind == "ramp")
+                ref = np.stack(second_order_basis(kind, t, 0.2, zeta,
+                                                  0.73 if kind == "pulse" else None), axis=1)
+                np.testing.assert_allclose(b, ref, atol=1e-12)
+
+
+def test_one_compilation_serves_every_model_and_batch_size():
+    from tactile_cli.fos import compile_cache
+    from tactile_cli.fos.fit import _bucket
+
+    assert [_bucket(n) for n in (1, 32, 33, 48, 49, 64, 65, 100, 150, 200, 300)] == [
+        32, 32, 48, 48, 64, 64, 96, 128, 192, 256, 384]
+    before = set(compile_cache._PROGRAMS)
+    d = make_trials("pulse", seed=17, n_trials=N_TRIALS)
+    fit_pulse(d["t"], d["y"][:3], duration_s=T_S)  # 3 trials, 150 points: bucket 192
+    fit_pulse(d["t"][:140], d["y"][:, :140])  # T fitted, 64 trials, 140 points
+    fit_ramp(d["t"], make_trials("ramp", seed=18, n_trials=100)["y"])  # two chunks
+    fit_step(d["t"], make_trials("step", seed=19, n_trials=5)["y"])
+    select_order("pulse", d["t"], d["y"][:10], duration_s=T_S)  # and the second order
+    new = set(compile_cache._PROGRAMS) - before
+    assert {(rows, points) for _, rows, points in new} <= {(64, 192)}
+    default = {spec for spec, _, _ in compile_cache._PROGRAMS
+               if spec.solver == "levenberg_marquardt" and spec.max_steps == 64}
+    assert len(default) == 1  # pulse, step, ramp, both orders: one specialisation
+
+
+def test_the_traced_program_is_saved_and_reloaded(tmp_path, monkeypatch):
+    """With the cache enabled, the solver is exported to the cache folder; a fresh process
+    (here: an emptied program table) loads it, and a damaged file is traced anew."""
+    pytest.importorskip("flatbuffers")
+    from tactile_cli.fos import compile_cache
+
+    monkeypatch.setenv("TACTILE_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(compile_cache, "_PROGRAMS", {})
+    monkeypatch.setattr(compile_cache, "_EXPORT_DIR", compile_cache.program_cache_dir())
+    d = make_trials("ramp", seed=20, n_trials=8)
+    first = fit_ramp(d["t"][:40], d["y"][:, :40])
+    files = list((tmp_path / "fos").glob("solver-*-64x48.jaxexport"))
+    assert len(files) == 1
+    monkeypatch.setattr(compile_cache, "_PROGRAMS", {})
+    again = fit_ramp(d["t"][:40], d["y"][:, :40])
+    np.testing.assert_array_equal(again.tau_s, first.tau_s)
+    files[0].write_bytes(b"not a program")
+    monkeypatch.setattr(compile_cache, "_PROGRAMS", {})
+    np.testing.assert_array_equal(fit_ramp(d["t"][:40], d["y"][:, :40]).tau_s, first.tau_s)
+    assert files[0].read_bytes() != b"not a program"  # traced and saved again
+
+
+def test_a_stalled_ramp_on_flattening_counts_is_reported_saturated():
+    """A slip whose counts flatten (saturation) is not first-order: when its ramp fit runs
+    out of steps the status says so instead of advising more steps."""
+    from tactile_cli.fos.fit import _flattens
+
+    t = np.arange(N_POINTS) * DT_S
+    ramp = ramp_response(t, 1615.0, 0.3)
+    flat = 2500.0 * np.tanh(ramp / 2500.0)
+    y = np.stack([flat, ramp])
+    mask = np.ones_like(y, bool)
+    assert _flattens(np.tile(t, (2, 1)), y, mask).tolist() == [True, False]
+    r = fit_ramp(t, y, options=FitOptions(max_steps=1))
+    assert r.status.tolist() == [FitStatus.SATURATED.value, FitStatus.MAX_STEPS.value]
+    assert "saturated, not first-order" in FitStatus.SATURATED.message
+    assert "raise `max_steps`" not in FitStatus.SATURATED.message

@@ -154,6 +154,74 @@ def test_csv_curve(tmp_path):
     assert table.exit_code == 0 and "curve: 1 converged, 0 failed" in table.stdout
 
 
+def _pulse_csv(path, header, *, alpha=12.0, tau=0.3, duration=0.6, n=80, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.02
+    _write_curve(path, t, rng.normal(pulse_response(t, alpha, tau, duration), 0.2), header)
+    return path
+
+
+def test_csv_units_come_from_the_header_or_units(tmp_path):
+    newton = _pulse_csv(tmp_path / "newton.csv", "t (s),force (N)")
+    plain = _pulse_csv(tmp_path / "plain.csv", "t,x", seed=1)
+    result = runner.invoke(app, ["fit-fos", str(newton), "--model", "pulse", "--no-order"],
+                           terminal_width=200)
+    assert result.exit_code == 0, result.output
+    assert "alpha (N)" in result.stdout and "RSS (N)^2" in result.stdout
+    assert "ev/bin" not in result.stdout
+    result = runner.invoke(app, ["fit-fos", str(plain), "--model", "pulse", "--no-order",
+                                 "--json"])
+    rec = json.loads(result.stdout)["regions"]["curve"]["fits"][0]
+    assert rec["units"] == "units"
+    result = runner.invoke(app, ["fit-fos", str(newton), "--model", "pulse", "--no-order",
+                                 "--units", "kPa", "--json"])
+    rec = json.loads(result.stdout)["regions"]["curve"]["fits"][0]
+    assert rec["units"] == "kPa" and abs(rec["alpha"] / 12.0 - 1) < 0.05
+    assert rec["rss"] > 0 and rec["residual_std"] > 0
+    ms = _pulse_csv(tmp_path / "ms.csv", "t (ms),x")
+    result = runner.invoke(app, ["fit-fos", str(ms), "--model", "pulse"])
+    assert result.exit_code == 2 and "give t in seconds" in result.stderr
+
+
+def test_several_csvs_in_one_call_with_figures_named_after_them(tmp_path):
+    a = _pulse_csv(tmp_path / "press_a.csv", "t,force (N)")
+    b = _pulse_csv(tmp_path / "press_b.csv", "t,x", alpha=8.0, tau=0.25, duration=0.5,
+                   n=60, seed=2)
+    figures = tmp_path / "figs"
+    result = runner.invoke(app, ["fit-fos", str(a), str(b), "--model", "pulse", "--plot",
+                                 str(figures), "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["files"] == [str(a), str(b)] and out["file"] is None
+    recs = out["regions"]["curve"]["fits"]
+    assert [r["trial"] for r in recs] == ["press_a", "press_b"]
+    assert [r["units"] for r in recs] == ["N", "units"]
+    assert all(r["status"] == "converged" for r in recs)
+    assert abs(recs[1]["tau_s"] / 0.25 - 1) < 0.05 and recs[1]["n_points"] == 60
+    assert sorted(p.name for p in figures.glob("*.png")) == ["press_a.png", "press_b.png"]
+    c = _pulse_csv(tmp_path / "press_c.csv", "t,x", seed=3)  # the next curve adds its own
+    result = runner.invoke(app, ["fit-fos", str(c), "--model", "pulse", "--plot",
+                                 str(figures)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in figures.glob("*.png")) == ["press_a.png", "press_b.png",
+                                                             "press_c.png"]
+    table = runner.invoke(app, ["fit-fos", str(a), str(b), "--model", "pulse", "--no-order"],
+                          terminal_width=200)
+    assert "units" in table.stdout and "curve: 2 converged, 0 failed" in table.stdout
+
+
+def test_several_inputs_errors(tmp_path, h5copy):
+    a = _pulse_csv(tmp_path / "x.csv", "t,x")
+    (tmp_path / "other").mkdir()
+    b = _pulse_csv(tmp_path / "other" / "x.csv", "t,x")
+    result = runner.invoke(app, ["fit-fos", str(a), str(b), "--model", "pulse"])
+    assert result.exit_code == 2 and "two inputs are named 'x'" in result.stderr
+    result = runner.invoke(app, ["fit-fos", str(h5copy), str(a)])
+    assert result.exit_code == 2 and "one HDF5 file per call" in result.stderr
+    result = runner.invoke(app, ["fit-fos", str(h5copy), "--units", "N"])
+    assert result.exit_code == 2 and "--units applies to CSV curves" in result.stderr
+
+
 @pytest.mark.parametrize(("rows", "message"), [
     (["t,x", "0.0,1", "0.02,abc"], "line 3: 'abc' is not a finite number"),
     (["t,x", "0.0,1", "0.02,2,3"], "line 3: expected 2 values (t, x), got 3"),
@@ -186,6 +254,42 @@ def test_option_errors(h5copy, tmp_path):
 def test_the_cli_caches_compilations_under_tactile_cache_dir(fitted):
     cache = os.path.join(os.environ["TACTILE_CACHE_DIR"], "jax")
     assert os.path.isdir(cache) and os.listdir(cache)
+    if importlib.util.find_spec("flatbuffers") is not None:  # the traced program too
+        programs = os.path.join(os.environ["TACTILE_CACHE_DIR"], "fos")
+        assert any(name.endswith(".jaxexport") for name in os.listdir(programs))
+
+
+def test_help_says_where_the_solver_is_cached():
+    result = runner.invoke(app, ["fit-fos", "--help"], terminal_width=400)
+    assert result.exit_code == 0
+    assert os.environ["TACTILE_CACHE_DIR"] in result.stdout
+    assert "TACTILE_CACHE_DIR" in result.stdout
+
+
+def test_the_table_reports_rss_beside_the_residual_sd(fitted):
+    path, out = fitted
+    for region, recs in out["regions"].items():
+        n_params = 3 if region == "press" else 2  # pulse with T fitted; ramp
+        for r in recs["fits"]:
+            np.testing.assert_allclose(r["rss"], r["residual_std"] ** 2
+                                       * (r["n_points"] - n_params), rtol=1e-9)
+            assert r["units"] == "events/bin"
+    result = runner.invoke(app, ["fit-fos", str(path), "--no-write", "--kind", "press",
+                                 "--no-order"], terminal_width=200)
+    assert result.exit_code == 0, result.output
+    assert "alpha (ev/bin)" in result.stdout
+    assert "s (ev/bin)" in result.stdout and "RSS (ev/bin)^2" in result.stdout
+
+
+def test_rss_is_derived_for_groups_written_before_it_was_stored(fitted, tmp_path):
+    from tactile_cli.fos.table import read_fit_group
+
+    old = tmp_path / "old.h5"
+    shutil.copyfile(fitted[0], old)
+    stored = read_fit_group(old, "fos_press")["rss"]
+    with h5py.File(old, "r+") as h5:
+        del h5["derived/fits/fos_press/rss"]
+    np.testing.assert_allclose(read_fit_group(old, "fos_press")["rss"], stored, rtol=1e-9)
 
 
 # ----------------------------------------------------------------- the marker-event scene

@@ -30,7 +30,8 @@ def test_unknown_and_mixed_formats(tmp_path):
         detect_format([tmp_path / "a.csv"], IngestOptions(format="hdf4"))
     (tmp_path / "d").mkdir()
     with pytest.raises(InputError,
-                       match="cannot tell the format of a folder; pass `format='accel-tree'`"):
+                       match=r"cannot tell the format of a folder \(no PNG/JPG frames in it or "
+                             r"in its subfolders\); pass `format='accel-tree'`"):
         detect_format([tmp_path / "d"], IngestOptions())
 
 

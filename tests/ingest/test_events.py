@@ -71,7 +71,7 @@ def test_dvxplorer_aedat4_ingests_every_event(tmp_path):
             ("event_camera", 320, 240)
         assert float(sensor["sample_rate_hz"]) == 0.0
         trial = f["trials/dvxplorer_sample"]
-        assert "signals" not in trial  # the IMU stream is ignored
+        assert list(trial["signals"]) == ["imu"]  # its IMU too (tests/ingest/test_aedat4_streams)
         assert trial["events"].attrs["sensor"] == "DVXplorer_DXB00010"
         assert abs(float(trial.attrs["duration_s"]) - 0.589917) < 1e-9
         digest = hashlib.sha256(src.read_bytes()).hexdigest()
@@ -100,7 +100,7 @@ def test_aedat4_two_files_one_camera_and_sensor_override(tmp_path):
     shutil.copy(src, b)
     out = ingest([a, b], tmp_path / "two.h5", options=IngestOptions(sensor_name="left cam"))
     with h5py.File(out) as f:
-        assert list(f["sensors"]) == ["left_cam"]
+        assert list(f["sensors"]) == ["left_cam", "left_cam_imu"]  # one IMU sensor for both
         assert sorted(f["trials"]) == ["a", "b"]
         assert f["provenance/sources/path"].shape == (2,)
 

@@ -328,3 +328,55 @@ def test_cli_fps_sets_the_frame_times(tmp_path):
     with h5py.File(out) as h5:
         np.testing.assert_allclose(h5["trials/press/frames/t_s"][()], np.arange(5) / 50.0)
         assert "frame_rate_assumed_hz" not in h5["trials/press"].attrs
+
+
+def test_cli_notes_the_assumed_frame_rate(tmp_path):
+    _seq(tmp_path / "press", n=3)
+    out = tmp_path / "o.h5"
+    result = runner.invoke(app, ["ingest", str(tmp_path / "press"), "--out", str(out),
+                                 "--no-progress"])
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        "tactile: note: press has no timestamps.csv: frames taken as evenly spaced at 30 Hz "
+        "(DIGIT's rate; recorded as the trial attribute frame_rate_assumed_hz); give the real "
+        "rate with --fps HZ, or a timestamps.csv (t_s per frame) in the folder"]
+    with h5py.File(out) as h5:
+        assert h5["trials/press"].attrs["frame_rate_assumed_hz"] == DEFAULT_FRAME_RATE_HZ
+    # a rate given, or timestamps in the folder: nothing assumed, no note
+    given = runner.invoke(app, ["ingest", str(tmp_path / "press"), "--fps", "25", "--out",
+                                str(tmp_path / "g.h5"), "--no-progress"])
+    assert given.exit_code == 0 and given.stderr == ""
+    (tmp_path / "press" / "timestamps.csv").write_text("t_s\n0\n0.1\n0.2\n")
+    timed = runner.invoke(app, ["ingest", str(tmp_path / "press"), "--out",
+                                str(tmp_path / "t.h5"), "--no-progress"])
+    assert timed.exit_code == 0 and timed.stderr == ""
+
+
+def test_folder_of_sequence_folders_is_one_trial_each(tmp_path):
+    for name, n in (("press_10", 2), ("press_2", 3), ("press_1", 4)):
+        _seq(tmp_path / "digit" / name, n=n)
+    (tmp_path / "digit" / "README.txt").write_text("three presses\n")  # files are not trials
+    (tmp_path / "digit" / "press_2" / "timestamps.csv").write_text("t_s\n0\n0.05\n0.1\n")
+    out = tmp_path / "o.h5"
+    result = runner.invoke(app, ["ingest", str(tmp_path / "digit"), "--out", str(out),
+                                 "--no-progress"])
+    assert result.exit_code == 0, result.output
+    note = result.stderr.strip()
+    assert note.startswith("tactile: note: 2 folders (press_1, press_10) have no timestamps.csv")
+    assert validate_file(out).ok
+    with h5py.File(out) as h5:
+        assert list(h5["trials"]) == ["press_1", "press_2", "press_10"]  # natural order
+        assert [h5[f"trials/{t}/frames/images"].shape[0] for t in h5["trials"]] == [4, 3, 2]
+        np.testing.assert_allclose(h5["trials/press_2/frames/t_s"][()], [0, 0.05, 0.1])
+
+
+def test_folder_of_sequence_folders_refuses_a_subfolder_without_frames(tmp_path):
+    _seq(tmp_path / "digit" / "press_1", n=2)
+    (tmp_path / "digit" / "calibration").mkdir()
+    (tmp_path / "digit" / "calibration" / "gel.yaml").write_text("a: 1\n")
+    with pytest.raises(InputError, match=r"digit: holds image-sequence folders \(press_1, \.\.\.\) "
+                                         r"and calibration/, which has no PNG/JPG frames"):
+        ingest([tmp_path / "digit"], tmp_path / "o.h5", options=IngestOptions())
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match=r"empty: cannot tell the format of a folder"):
+        ingest([tmp_path / "empty"], tmp_path / "o.h5", options=IngestOptions())

@@ -160,6 +160,34 @@ def test_missing_sidecar_file(tmp_path, recordings):
         "file not found"
 
 
+def test_split_column_sets_the_split_attribute(tmp_path, recordings):
+    labels = _write(tmp_path / "labels.csv", "trial,split,force\nrec_a,train,3\nrec b, test ,\n")
+    out = tmp_path / "out.h5"
+    result = _ingest_cli(recordings, out, "--trial-labels", str(labels))
+    assert result.exit_code == 0, result.output
+    assert validate_file(out).ok
+    with h5py.File(out) as f:
+        assert f["trials/rec_a"].attrs["split"] == "train"
+        assert f["trials/rec_b"].attrs["split"] == "test"
+        assert _attrs(f["trials/rec_a/labels"]) == {"force": 3}  # split is not a label
+        assert _attrs(f["trials/rec_b/labels"]) == {}
+    parsed = read_trial_labels(_write(tmp_path / "l.csv", "trial,split\nt1,val\nt2,\n"))
+    assert parsed.splits == {"t1": "val"}  # an empty cell assigns no split
+    assert parsed.rows == {"t1": ({}, 2), "t2": ({}, 3)}
+
+
+@pytest.mark.parametrize("value", ["training", "Train", "2"])
+def test_split_column_refuses_other_values(tmp_path, recordings, value):
+    labels = _write(tmp_path / "labels.csv", f"trial,split\nrec_a,train\nrec b,{value}\n")
+    out = tmp_path / "out.h5"
+    result = _ingest_cli(recordings, out, "--trial-labels", str(labels))
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (
+        f"tactile: error: {labels}, line 3, column 'split': split {value!r} is not one of "
+        "train, val, test; write one of them or leave the cell empty (no split)")
+    assert not out.exists()
+
+
 def test_number_or_text():
     assert number_or_text(" 12 ") == 12 and isinstance(number_or_text("12"), int)
     assert number_or_text("-0.5") == -0.5 and number_or_text("1e-3") == 0.001

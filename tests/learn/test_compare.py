@@ -160,6 +160,24 @@ def test_compare_by_f1_of_one_class(tmp_path):
         compare([a, b], metric="f1:grip")
 
 
+def test_compare_by_per_trial_accuracy_of_a_trial_level_target(tmp_path):
+    """Per window the first run wins; per trial (what a texture answer is) the second."""
+    a = fake_run(tmp_path, "a", "mlp", accuracy=0.74, latency_ms=0.1, n_params=10)
+    b = fake_run(tmp_path, "b", "cnn2d_spectrogram", accuracy=0.71, latency_ms=0.2,
+                 n_params=20)
+    for run, votes in ((a, 0.88), (b, 0.945)):
+        path = run / "eval" / "scene" / "metrics.json"
+        m = json.loads(path.read_text())
+        m["heads"]["action"]["per_trial"] = {"n_trials": 200, "majority_accuracy": votes}
+        path.write_text(json.dumps(m))
+    assert compare([a, b]).best.label == "mlp/a"
+    cmp = compare([a, b], metric="trial_accuracy")
+    assert cmp.best.label == "cnn2d_spectrogram/b" and cmp.metric_label == "per-trial accuracy"
+    c = fake_run(tmp_path, "c", "lstm", accuracy=0.9, latency_ms=0.1, n_params=5)
+    with pytest.raises(InputError, match="has no per-trial result"):
+        compare([a, c], metric="trial_accuracy")
+
+
 def test_compare_accepts_a_file_derived_from_the_same_recordings(tmp_path):
     # the spatial run is evaluated on `tactile centroids scene.h5`'s output (another file,
     # whose source is scene.h5 with sha "a"*64): same recordings, same trials, one chart
@@ -233,4 +251,5 @@ def test_cli_compare_table_files_json_and_errors(runs, tmp_path):
     assert len(bad.stderr.strip().splitlines()) == 1
     metric = runner.invoke(app, ["compare", *dirs, "--metric", "recall"])
     assert metric.exit_code == 2
-    assert "--metric must be accuracy, macro_f1 or f1:<class>, got 'recall'" in metric.stderr
+    assert ("--metric must be accuracy, macro_f1, trial_accuracy or f1:<class>, got 'recall'"
+            in metric.stderr)

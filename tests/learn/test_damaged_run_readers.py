@@ -7,13 +7,16 @@ run left as it was. And a run trained on named classes refuses data whose label 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 
 import h5py
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
+from tactile_cli.errors import InputError
 from tactile_cli.learn.evaluate import evaluate
 from tactile_cli.learn.train import train
 
@@ -146,3 +149,31 @@ def test_data_whose_label_lost_its_classes_is_refused(command, run_folder, heldo
                                "`classes` attribute"), lines[0]
     assert not (run / "eval" / "x").exists() and not (run / "perturb").exists()
     assert data.read_bytes() == before
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda m: m["heads"][m["primary_head"]].update(accuracy="high"), "`accuracy` and"),
+    (lambda m: m["heads"][m["primary_head"]]["per_class"][0].update(f1="x"),
+     "`per_class` must list"),
+    (lambda m: m["heads"][m["primary_head"]].update(confusion_matrix=[[1]]),
+     "`confusion_matrix` must be"),
+    (lambda m: m.update(latency={"batch1_ms_median": "fast"}), "`latency` must hold"),
+    (lambda m: m.update(model=None), "`model` must hold"),
+    (lambda m: m.update(n_windows=1.5), "`n_windows` must be an integer"),
+])
+def test_read_metrics_checks_the_fields_compare_and_report_read(tmp_path, edit, message):
+    from tactile_cli.learn.evaluate import classification_metrics
+    from tactile_cli.learn.runs import read_metrics
+
+    cm = classification_metrics(np.array([0, 1, 1]), np.array([0, 1, 0]), ["a", "b"],
+                                head="h")
+    m = {"format": "tactile-eval", "format_version": 1, "primary_head": "h",
+         "heads": {"h": cm.as_dict()}, "latency": None,
+         "model": {"n_params": 10, "size_mb": 0.1}, "n_windows": 3}
+    path = tmp_path / "metrics.json"
+    path.write_text(json.dumps(m))
+    assert read_metrics(path)["heads"]["h"]["n"] == 3
+    edit(m)
+    path.write_text(json.dumps(m))
+    with pytest.raises(InputError, match=re.escape(message)):
+        read_metrics(path)

@@ -113,7 +113,7 @@ def test_channels_in_another_order_in_the_file_are_read_in_the_run_s_order(run10
     # predictions, nothing to refuse
     run, data = run100
     swapped = counts_file(tmp_path / "swapped.h5", channel_names=("net", "positive"))
-    ref = evaluate(run, [data], latency=False, name="ref").as_dict()
+    ref = evaluate(run, [data], latency=False, name="ref_order").as_dict()
     res = evaluate(run, [swapped], latency=False, name="swapped").as_dict()
     assert res["input"]["channels"] == ["net", "positive"]
     assert res["heads"] == ref["heads"]

@@ -67,7 +67,7 @@ def test_evaluate_failing_midway_keeps_the_earlier_evaluation(run_copy, heldout_
 
     monkeypatch.setattr(evaluate, "plot_confusion", boom)  # after metrics.json is written
     result = runner.invoke(app, ["evaluate", str(run_copy), "--data", str(heldout_file),
-                                 "--no-latency"])
+                                 "--no-latency", "--overwrite"])
     _one_error_line(result, "cannot draw the confusion matrix")
     assert _tree(run_copy) == before
     assert _hidden(run_copy) == []

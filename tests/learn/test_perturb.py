@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 
 import numpy as np
@@ -251,3 +252,30 @@ def test_evaluate_perturb_delegates_to_perturb(runs, heldout_file):
     bad = runner.invoke(app, ["evaluate", str(runs["mlp"]), "--data", str(heldout_file),
                               "--perturb", "--threshold", "2x"])
     assert bad.exit_code == 2
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda d: "not json{", "not valid JSON"),
+    (lambda d: json.dumps([1, 2]), "not a JSON object"),
+    (lambda d: json.dumps({**d, "kinds": "noise"}), "`kinds` must list"),
+    (lambda d: json.dumps({**d, "kinds": [{**d["kinds"][0], "levels": [
+        {**d["kinds"][0]["levels"][0], "accuracy": "high"}]}]}), "`accuracy` (='high')"),
+    (lambda d: json.dumps({**d, "kinds": [{k: v for k, v in d["kinds"][0].items()
+                                           if k != "level_name"}]}), "incomplete or mistyped"),
+])
+def test_a_damaged_perturb_json_is_one_error_naming_it(tmp_path, damage, message):
+    record = {"format": "tactile-perturb", "run": "r", "label": "r", "family": "lstm",
+              "name": "n", "split": "all", "data": [], "primary_head": "action",
+              "n_trials": 1, "clean_accuracy": 0.9, "clean_macro_f1": 0.8,
+              "clean_n_windows": 10, "threshold": 0.8, "threshold_rule": "0.9x", "seed": 0,
+              "sample_rate_hz": 50.0, "kinds": [{
+        "kind": "noise", "description": "noise", "level_name": "SNR (dB)",
+        "levels": [{"level": 40.0, "accuracy": 0.9, "macro_f1": 0.8, "n_windows": 10}],
+        "breaking": []}]}
+    path = tmp_path / "perturb.json"
+    path.write_text(json.dumps(record))
+    assert load_perturbation(tmp_path).kinds[0].levels[0].accuracy == 0.9  # intact: read
+    path.write_text(damage(record))
+    with pytest.raises(InputError, match=re.escape(message)) as err:
+        load_perturbation(tmp_path)
+    assert "perturb.json" in str(err.value) and "\n" not in str(err.value)

@@ -74,8 +74,8 @@ def test_report_is_self_contained_and_holds_every_section(runs, heldout_file, tm
     perturb_evaluate(runs["mlp"], [heldout_file], ["noise", "lowpass"],
                      {"noise": [30, -20], "lowpass": [0.25, 0.01]}, name="rep")
     figs = tmp_path / "figs"
-    _png(figs / "fit_fos_press.png", "press")
-    _png(figs / "slip" / "slip_speed.png", "slip")
+    _png(figs / "fits" / "fos_press_light.png", "press")
+    _png(figs / "slip" / "slip_g1_level02.png", "slip")
     res = build_report(list(runs.values()), tmp_path / "report", data_paths=[heldout_file],
                        figure_dirs=[figs], command="tactile report test")
     page = res.index.read_text(encoding="utf-8")
@@ -100,14 +100,19 @@ def test_report_is_self_contained_and_holds_every_section(runs, heldout_file, tm
         assert f"{m['model']['n_params']:,}" in page
         assert f"{family}/{family}" in page
     assert "training curves" in " ".join(links.captions)
-    assert "fit_fos_press.png" in links.captions and "slip/slip_speed.png" in links.captions
+    # captions say what a figure shows, not where its file lies
+    assert ("first-order fits of the press region (eq. 16), one panel per trial: force grade "
+            "light") in links.captions
+    assert any(c.startswith("slip: ROI centroids") and c.endswith(": trial g1_level02")
+               for c in links.captions)
+    assert not [c for c in links.captions if c.endswith(".png")]
     assert "heldout.h5" in page and "12 (" in page  # data summary: 12 trials
 
     record = json.loads(res.provenance.read_text())
     assert record["command"] == "tactile report test" and record["tool_version"]
     roles = {(i["role"], i["path"]): i["sha256"] for i in record["inputs"]}
     assert roles[("data", str(heldout_file))] == sha256_of(heldout_file)
-    assert ("figure", str(figs / "slip" / "slip_speed.png")) in roles
+    assert ("figure", str(figs / "slip" / "slip_g1_level02.png")) in roles
     assert sum(1 for r, _ in roles if r == "metrics") >= 3
     assert sum(1 for r, _ in roles if r == "perturb") >= 2
     assert not [p for p in res.index.parent.iterdir() if p.name.startswith(".")]

@@ -93,7 +93,7 @@ def test_a_small_lstm_learns_the_action_task_well_above_chance(tiny_run, heldout
 
 def test_evaluate_writes_metrics_confusion_and_latency(tiny_run, heldout_file):
     out, _ = tiny_run
-    res = evaluate(out, [heldout_file], threads=1)
+    res = evaluate(out, [heldout_file], threads=1, overwrite=True)
     folder = out / "eval" / "heldout"
     assert res.out_dir == folder
     metrics = json.loads((folder / "metrics.json").read_text())
@@ -184,6 +184,18 @@ def test_cli_train_and_evaluate(tmp_path, action_file, heldout_file):
     missing = runner.invoke(app, ["evaluate", str(tmp_path), "--data", str(heldout_file)])
     assert missing.exit_code == 2
     assert "not a run folder (no run.json)" in missing.stderr
+    # an existing evaluation of the same name is kept unless --overwrite (issue 21, item 2)
+    before = (run / "eval" / "heldout" / "metrics.json").read_bytes()
+    again = runner.invoke(app, ["evaluate", str(run), "--data", str(heldout_file),
+                                "--no-latency"])
+    assert again.exit_code == 2 and again.stderr.count("\n") == 1
+    assert "evaluation folder exists; pass --overwrite to replace it or give another --name" \
+        in again.stderr
+    assert (run / "eval" / "heldout" / "metrics.json").read_bytes() == before
+    forced = runner.invoke(app, ["evaluate", str(run), "--data", str(heldout_file),
+                                 "--no-latency", "--overwrite"])
+    assert forced.exit_code == 0, forced.output
+    assert (run / "eval" / "heldout" / "metrics.json").read_bytes() != before
 
 
 def _accel_file(path):

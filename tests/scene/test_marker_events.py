@@ -30,6 +30,7 @@ from tactile_cli.scene import (
     simulate_marker_events,
     slip_px_per_m,
 )
+from tactile_cli.store.origin import data_origin
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIG = REPO / "configs" / "scene_marker_events.yaml"
@@ -222,6 +223,7 @@ def test_annotations_and_trials_csv_agree(scene):
         for key, value in truth.items():
             assert number_or_text(row[key]) == ("" if value is None else value), key
         assert int(row["n_events"]) == np.load(out / f"{row['trial']}.npy").size
+        assert (row["origin"], row["dataset"]) == ("simulated", f"marker-events seed {SEED}")
     ann = _read_csv(out / "annotations.csv")
     assert len(ann) == 4 * len(trials)
     for name, trial in trials.items():
@@ -326,6 +328,7 @@ def test_ingest_with_sidecars_round_trips_the_ground_truth(scene, tmp_path):
                                  "--annotations", str(out / "annotations.csv"),
                                  "--trial-labels", str(out / "trials.csv"), "--out", str(h5)])
     assert result.exit_code == 0, result.output
+    assert data_origin([h5])["kind"] == "simulated"  # the convention of store/origin.py
     rows = _read_csv(out / "trials.csv")
     ann = _read_csv(out / "annotations.csv")
     with h5py.File(h5) as f:
@@ -341,6 +344,7 @@ def test_ingest_with_sidecars_round_trips_the_ground_truth(scene, tmp_path):
             assert labels == want
             assert isinstance(labels["force_level"], int) and labels["force_grade"] in (
                 "light", "small medium", "big")
+            assert labels["origin"] == "simulated"
             mine = [(float(a["start_s"]), float(a["end_s"]), a["label"]) for a in ann
                     if a["trial"] == row["trial"]]
             got = list(zip(g["annotations/start_s"][()].tolist(),

@@ -97,6 +97,9 @@ def test_same_seed_same_file_and_the_layout(tmp_path):
         assert 1 <= lab["force_level"] <= 12
         assert lab["force_grade"] == ["light", "small", "small medium", "medium", "small big",
                                       "big"][(lab["force_level"] - 1) // 2]
+        # where the trials come from (tactile_cli.store.origin)
+        assert lab["origin"] == "synthetic"
+        assert lab["dataset"] == "synth seed 0 from the config's FOS values"
         ann = trial["annotations"]
         assert ann["label"].asstr()[()].tolist() == list(ACTIONS)
         starts = ann["start_s"][()]
