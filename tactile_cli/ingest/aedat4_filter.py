@@ -120,11 +120,37 @@ def _drop_nodes(xml: str, drop: set[int]) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
+def parse_io_header(buf: bytes) -> tuple[int, int, bytes]:
+    """(compression, data table position or -1, XML description) from the header's IOHeader
+    flatbuffer; struct.error or ValueError when an offset points outside it."""
+    def get(fmt: str, at: int) -> int:
+        if at < 0:
+            raise ValueError(f"offset {at}")
+        return struct.unpack_from(fmt, buf, at)[0]
+
+    table = get("<I", 0)
+    vtable = table - get("<i", table)
+    vt_len = get("<H", vtable)
+
+    def field(i: int) -> int:  # offset of field i in the table, 0 when absent
+        at = 4 + 2 * i
+        return get("<H", vtable + at) if at + 2 <= vt_len else 0
+
+    compression = get("<i", table + field(0)) if field(0) else 0
+    table_pos = get("<q", table + field(1)) if field(1) else -1
+    if not field(2):
+        raise ValueError("no XML description")
+    text = table + field(2) + get("<I", table + field(2))
+    length = get("<I", text)
+    if text + 4 + length > len(buf):
+        raise ValueError("XML description runs past the header")
+    return compression, table_pos, buf[text + 4:text + 4 + length]
+
+
 def _read_io_header(buf: bytes, path: Path) -> tuple[int, int, bytes]:
-    from .events_aedat4 import _io_header  # one flatbuffer parser for both modules
 
     try:
-        return _io_header(buf)
+        return parse_io_header(buf)
     except (struct.error, ValueError):
         raise InputError("AEDAT4 file header is damaged (its IOHeader cannot be parsed)",
                          path=path) from None

@@ -43,7 +43,7 @@ from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import EventAppender, StoreWriter
 from . import IngestOptions
-from .aedat4_filter import KNOWN_TYPES, copy_without_streams, unknown_streams
+from .aedat4_filter import KNOWN_TYPES, copy_without_streams, parse_io_header, unknown_streams
 from .aedat4_streams import FrameCollector, ImuCollector, TriggerCollector
 from .events_table import DEFAULT_SENSOR, event_sensor
 
@@ -361,7 +361,7 @@ def _layout_problem(f: BinaryIO) -> str | None:
     if start > size:
         return f"AEDAT4 file is cut short inside its header ({size} bytes, header ends at {start})"
     try:
-        compression, table_pos, info = _io_header(f.read(header_len))
+        compression, table_pos, info = parse_io_header(f.read(header_len))
     except (struct.error, ValueError):
         return "AEDAT4 file header is damaged (its IOHeader cannot be parsed)"
     try:  # checked here: the decoder panics (or aborts the process) on some damaged headers
@@ -398,33 +398,6 @@ def _layout_problem(f: BinaryIO) -> str | None:
         return (f"{size - table_pos - length} bytes after the end of the file data table "
                 f"(byte {table_pos + length}): trailing garbage, or two files joined")
     return None
-
-
-def _io_header(buf: bytes) -> tuple[int, int, bytes]:
-    """(compression, data table position or -1, XML description) from the header's IOHeader
-    flatbuffer; struct.error or ValueError when an offset points outside it."""
-    def get(fmt: str, at: int) -> int:
-        if at < 0:
-            raise ValueError(f"offset {at}")
-        return struct.unpack_from(fmt, buf, at)[0]
-
-    table = get("<I", 0)
-    vtable = table - get("<i", table)
-    vt_len = get("<H", vtable)
-
-    def field(i: int) -> int:  # offset of field i in the table, 0 when absent
-        at = 4 + 2 * i
-        return get("<H", vtable + at) if at + 2 <= vt_len else 0
-
-    compression = get("<i", table + field(0)) if field(0) else 0
-    table_pos = get("<q", table + field(1)) if field(1) else -1
-    if not field(2):
-        raise ValueError("no XML description")
-    text = table + field(2) + get("<I", table + field(2))
-    length = get("<I", text)
-    if text + 4 + length > len(buf):
-        raise ValueError("XML description runs past the header")
-    return compression, table_pos, buf[text + 4:text + 4 + length]
 
 
 def _frame_length(kind: str, buf: bytes) -> int | None:

@@ -60,7 +60,9 @@ from .data import (
     read_trials,
     resolve_channels,
 )
-from .evaluate import (
+from .heads import primary_head
+from .inputs import checked_input, input_record
+from .metrics import (
     EvalResult,
     check_eval_folder,
     classification_metrics,
@@ -69,8 +71,6 @@ from .evaluate import (
     measure_latency_of,
     write_eval,
 )
-from .heads import primary_head
-from .inputs import checked_input, input_record
 from .models import count_parameters, state_size_bytes
 from .splits import FoldPlan, cv_folds, default_by
 from .train import GivenSplits, predict, train

@@ -32,17 +32,29 @@ import io
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from ..config_file import read_text
 from ..errors import InputError
 from ..natural import natural_key
 from .config import SplitConfig
 
-if TYPE_CHECKING:
-    from .data import TrialSeries
-
 SPLITS: tuple[str, ...] = ("train", "val", "test")
+
+
+class SplitTrial(Protocol):
+    """What a split rule reads of a trial (:class:`tactile_cli.learn.data.TrialSeries` has
+    it): where it is, its ``split`` attribute and its labels."""
+
+    file: str
+    trial: str
+    split_attr: str
+    trial_labels: dict[str, Any]
+    sample_labels: dict[str, Any]
+    classes: dict[str, tuple[str, ...] | None]
+
+    @property
+    def key(self) -> str: ...
 
 
 @dataclass(frozen=True)
@@ -92,7 +104,7 @@ def _rank(seed: int, text: str) -> str:
     return hashlib.sha256(f"{seed}|{text}".encode()).hexdigest()
 
 
-def trial_class(trial: TrialSeries, by: str) -> str:
+def trial_class(trial: SplitTrial, by: str) -> str:
     """The value of label ``by`` for a trial: its trial label, or for a per-sample label the
     classes its samples hold, joined with ``+`` (``no_slip+slip``; ``unlabelled`` when none)."""
     if by in trial.trial_labels:
@@ -114,7 +126,7 @@ def trial_class(trial: TrialSeries, by: str) -> str:
                      path=trial.file, where=f"/trials/{trial.trial}/labels")
 
 
-def _strata(trials: Sequence[TrialSeries], by: str) -> dict[str, list[int]]:
+def _strata(trials: Sequence[SplitTrial], by: str) -> dict[str, list[int]]:
     """class value -> indices of its trials, classes in natural order."""
     out: dict[str, list[int]] = {}
     for i, t in enumerate(trials):
@@ -138,7 +150,7 @@ def default_by(split: SplitConfig, targets: Sequence[Any] = ()) -> str | None:
 
 
 # -- train/val/test ----------------------------------------------------------------------------
-def assign_splits(trials: Sequence[TrialSeries], split: SplitConfig, seed: int, *,
+def assign_splits(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, *,
                   by: str | None = None) -> SplitAssignment:
     """Assign whole trials to train/val/test by ``split.mode`` (see the module docstring);
     ``by``: the label of ``stratified``/``group`` when ``split.by`` is not set."""
@@ -194,7 +206,7 @@ def assign_splits(trials: Sequence[TrialSeries], split: SplitConfig, seed: int, 
                            tuple(warnings))
 
 
-def _group_split(trials: Sequence[TrialSeries], split: SplitConfig, seed: int, by: str
+def _group_split(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, by: str
                  ) -> SplitAssignment:
     groups = _strata(trials, by)
     n = len(trials)
@@ -220,7 +232,7 @@ def _group_split(trials: Sequence[TrialSeries], split: SplitConfig, seed: int, b
 
 
 # -- given splits ------------------------------------------------------------------------------
-def split_from_mapping(trials: Sequence[TrialSeries], mapping: Mapping[str, str], *,
+def split_from_mapping(trials: Sequence[SplitTrial], mapping: Mapping[str, str], *,
                        source: str | Path, mode: str = "given") -> SplitAssignment:
     """Splits given per trial (``file name/trial`` or a trial name unique in the data ->
     split): every trial must be covered, with one of train, val, test."""
@@ -293,8 +305,8 @@ def read_run_splits(path: str | Path) -> dict[str, str]:
     return {f"{Path(r[0]).name}/{r[1]}": r[2] for r in rows[1:] if len(r) >= 3}
 
 
-def held_out_trials(trials: Sequence[TrialSeries], *, split_csv: str | Path, split: SplitConfig,
-                seed: int, targets: Sequence[Any] = ()) -> list[TrialSeries]:
+def held_out_trials(trials: Sequence[SplitTrial], *, split_csv: str | Path, split: SplitConfig,
+                seed: int, targets: Sequence[Any] = ()) -> list[SplitTrial]:
     """The trials a trained run held out for test: those its ``split.csv`` marks test, and
     for trials the run never saw, those its split rule (same config and seed) puts in test."""
     recorded = read_run_splits(split_csv)
@@ -311,7 +323,7 @@ def held_out_trials(trials: Sequence[TrialSeries], *, split_csv: str | Path, spl
 
 
 # -- cross-validation --------------------------------------------------------------------------
-def cv_folds(trials: Sequence[TrialSeries], split: SplitConfig, seed: int, k: int | str, *,
+def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int | str, *,
              by: str | None = None) -> FoldPlan:
     """The folds of ``k``-fold (an int >= 2) or ``"loto"`` cross-validation; see the module
     docstring. Raises InputError when the data cannot give ``k`` folds."""

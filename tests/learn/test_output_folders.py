@@ -58,7 +58,7 @@ def test_evaluate_with_a_file_at_run_eval_is_one_line(run_copy, heldout_file):
 
 def test_evaluate_failing_midway_keeps_the_earlier_evaluation(run_copy, heldout_file,
                                                               monkeypatch):
-    evaluate = importlib.import_module("tactile_cli.learn.evaluate")  # the module
+    evaluate = importlib.import_module("tactile_cli.learn.metrics")  # writes the folder
 
     before = _tree(run_copy)
 
