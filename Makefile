@@ -62,6 +62,7 @@ demo: $(STAMP)
 	$(MAKE) --no-print-directory demo-events DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-learn DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-real DEMO=$(DEMO)
+	$(MAKE) --no-print-directory demo-accel DEMO=$(DEMO)
 	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
 	$(MAKE) --no-print-directory demo-report DEMO=$(DEMO)
 
@@ -124,10 +125,27 @@ demo-real: $(STAMP)
 	done
 # ---- end of the real-data step ------------------------------------------------------------
 
+# The accelerometer chain of paper 001, small: two short simulated vibro-slip scenes (seed 0
+# to train on, seed 1 to test on, 2 s per recording), prepared into 0.5 s segments with the
+# speed target, one multi-task spectrogram CNN (motion, texture, speed) for 3 epochs, and the
+# detection delay of sec. 6.5. The full study is in benchmarks/RESULTS.md ("Accelerometer").
+demo-accel: $(STAMP)
+	rm -rf $(DEMO)/accel $(DEMO)/runs_accel
+	mkdir -p $(DEMO)/accel
+	for s in 0 1; do \
+	  $(TACTILE) simulate vibro-slip --out $(DEMO)/accel/scene$$s --duration 2 --seed $$s --no-progress || exit 1; \
+	  $(TACTILE) ingest $(DEMO)/accel/scene$$s --format accel-tree --label origin=simulated --label "dataset=vibro-slip seed $$s" --out $(DEMO)/accel/scene$$s.h5 --no-progress || exit 1; \
+	  $(TACTILE) accel-prepare $(DEMO)/accel/scene$$s.h5 --out $(DEMO)/accel/prepared$$s.h5 --segment-s 0.5 --no-progress || exit 1; \
+	  rm -rf $(DEMO)/accel/scene$$s; \
+	done
+	$(TACTILE) train configs/train_cnn2d_vibro.yaml --data $(DEMO)/accel/prepared0.h5 --out $(DEMO)/runs_accel/cnn2d --epochs 3 --no-progress
+	$(TACTILE) evaluate $(DEMO)/runs_accel/cnn2d --data $(DEMO)/accel/prepared1.h5 --name vibro_seed1
+	$(TACTILE) detect-delay $(DEMO)/runs_accel/cnn2d --data $(DEMO)/accel/prepared1.h5
+
 # The report: the real-data runs (when there are any) and the simulated ones, every data
 # file, and the figure folders (quick looks of every file, the event chain's figures).
 demo-report: $(STAMP)
-	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --title "tactile demo: where every number comes from" --out $(DEMO)/report
+	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --title "tactile demo: where every number comes from" --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 bench: $(STAMP)
