@@ -168,6 +168,17 @@ def fit_fos_command(
              f"in {cache_root()} (set $TACTILE_CACHE_DIR to move it).")
     ] = Solver.levenberg_marquardt,
     max_steps: Annotated[int, typer.Option(min=1, help="Solver step limit per fit.")] = 64,
+    rtol: Annotated[float | None, typer.Option(
+        help="Relative stopping tolerance of the solver, in (0, 1); default 1e-10 (fits "
+             "reach the least-squares minimum to about 1e-9). A run-time input: no "
+             "recompilation.", show_default=False)] = None,
+    atol: Annotated[float | None, typer.Option(
+        help="Absolute stopping tolerance of the solver (log tau and RMS-scaled residuals), "
+             "in (0, 1); default 1e-10.", show_default=False)] = None,
+    p0: Annotated[str | None, typer.Option(
+        "--p0", help="Starting values of the first-order fits, e.g. 'tau=0.05,T=0.3' "
+                     "(seconds; alpha=... is accepted but the gains are solved in closed "
+                     "form); default: from the data.", show_default=False)] = None,
     order: Annotated[bool, typer.Option(
         "--order/--no-order",
         help="Also fit the second-order alternative and give the BIC verdict.")] = True,
@@ -199,6 +210,8 @@ def fit_fos_command(
     def body() -> None:
         from ..store.outdir import check_output_folder
         from ..store.trials import is_hdf5
+
+        options()  # bad --rtol, --atol or --p0: one line before any file is read
 
         for file in files:
             if not file.is_file():
@@ -241,12 +254,26 @@ def fit_fos_command(
     def options() -> Any:
         from ..fos.fit import FitOptions
 
-        return FitOptions(solver=solver.value, max_steps=max_steps)
+        tols = {}
+        for flag, value in (("rtol", rtol), ("atol", atol)):
+            if value is not None:
+                if not (0 < value < 1):  # NaN fails too
+                    raise InputError(f"--{flag} {value:g} must be a tolerance in (0, 1), "
+                                     "e.g. 1e-10")
+                tols[flag] = value
+        try:
+            return FitOptions(solver=solver.value, max_steps=max_steps, p0=_parse_p0(p0),
+                              **tols)
+        except ValueError as e:
+            raise InputError(str(e).replace("`p0`", "--p0")) from None
 
     def config() -> dict[str, Any]:
+        opts = options()
         return {"kind": (kind or Kind.both).value, "regions": (regions or Regions.auto).value,
                 "bin_ms": bin_ms, "press_duration_s": press_duration, "solver": solver.value,
-                "max_steps": max_steps, "order": order, "criterion": "bic", "units": units}
+                "max_steps": max_steps, "rtol": opts.rtol, "atol": opts.atol,
+                "p0": None if opts.p0 is None else dict(opts.p0), "order": order,
+                "criterion": "bic", "units": units}
 
     def _fit_h5(path: Path) -> dict[str, Any]:
         from ..fos.fit_file import fit_fos_file
@@ -325,6 +352,30 @@ def fit_fos_command(
             console.print(f"wrote {len(figures)} figure(s) to {plot}")
 
     run_guarded(body, flags=FLAGS)
+
+
+def _parse_p0(text: str | None) -> dict[str, float] | None:
+    """``"alpha=2,tau=0.05"`` -> ``{"alpha": 2.0, "tau": 0.05}``; one-line errors."""
+    from ..fos.fit import P0_NAMES
+
+    if text is None:
+        return None
+    out: dict[str, float] = {}
+    for item in text.split(","):
+        name, eq, value = (part.strip() for part in item.partition("="))
+        if not eq or not name:
+            raise InputError(f"--p0 {text!r}: expected name=value pairs separated by commas, "
+                             "e.g. 'tau=0.05,T=0.3'")
+        if name not in P0_NAMES:
+            raise InputError(f"--p0 names {name!r}; the starting values are "
+                             f"{', '.join(P0_NAMES)}")
+        if name in out:
+            raise InputError(f"--p0 gives {name} twice")
+        try:
+            out[name] = float(value)
+        except ValueError:
+            raise InputError(f"--p0 {name}={value!r} is not a number") from None
+    return out
 
 
 class _Status:

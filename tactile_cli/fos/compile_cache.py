@@ -88,8 +88,9 @@ def _arg_specs(n_rows: int, n_points: int) -> tuple[Any, ...]:
 
     rows = jax.ShapeDtypeStruct((n_rows, n_points), np.float64)
     flag = jax.ShapeDtypeStruct((), np.bool_)
+    tol = jax.ShapeDtypeStruct((), np.float64)
     return (rows, rows, rows, jax.ShapeDtypeStruct((n_rows,), np.float64),
-            jax.ShapeDtypeStruct((n_rows, 3), np.float64), flag, flag, flag)
+            jax.ShapeDtypeStruct((n_rows, 3), np.float64), flag, flag, flag, tol, tol)
 
 
 def _exported(spec: SolverSpec, n_rows: int, n_points: int, folder: Path) -> Any:

@@ -40,16 +40,15 @@ _FD_STEP = 1e-7
 @dataclass(frozen=True)
 class SolverSpec:
     """What a compiled program is specialised on, with the chunk shape: the solver and its
-    limits. Every model runs through the same program."""
+    step limit. Every model runs through the same program, and the stopping tolerances are
+    run-time inputs of it too (a new ``rtol``/``atol`` compiles nothing)."""
 
     solver: str  #: "levenberg_marquardt" or "gauss_newton"
-    rtol: float
-    atol: float
     max_steps: int
 
     def key(self) -> str:
         """A file-name-safe text naming this spec."""
-        return f"{self.solver}-r{self.rtol:g}-a{self.atol:g}-s{self.max_steps}"
+        return f"{self.solver}-s{self.max_steps}"
 
 
 class Flags(NamedTuple):
@@ -225,10 +224,11 @@ def _residual_jvp(primals: tuple, tangents: tuple) -> tuple[jax.Array, jax.Array
 
 
 def _solve_one(spec: SolverSpec, t: jax.Array, y: jax.Array, m: jax.Array,
-               duration: jax.Array, theta0: jax.Array, flags: Flags
-               ) -> tuple[jax.Array, jax.Array, jax.Array]:
+               duration: jax.Array, theta0: jax.Array, flags: Flags, rtol: jax.Array,
+               atol: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Solve one trial from ``theta0`` (3,): the solution, an outcome code (:data:`SUCCESS`,
-    :data:`MAX_STEPS`, :data:`NONFINITE`, :data:`FAILED`) and the steps taken."""
+    :data:`MAX_STEPS`, :data:`NONFINITE`, :data:`FAILED`) and the steps taken. ``rtol``
+    and ``atol`` are traced scalars: optimistix's Cauchy test only computes with them."""
     import optimistix as optx
 
     from .small_solve import SmallLeastSquares
@@ -236,7 +236,7 @@ def _solve_one(spec: SolverSpec, t: jax.Array, y: jax.Array, m: jax.Array,
     scale = 1.0 / jnp.sqrt(jnp.sum(m * y * y) / jnp.sum(m))
     args = (t, y, m, duration, scale, theta0, flags)
     solver = (optx.LevenbergMarquardt if spec.solver == "levenberg_marquardt"
-              else optx.GaussNewton)(rtol=spec.rtol, atol=spec.atol,
+              else optx.GaussNewton)(rtol=rtol, atol=atol,
                                      linear_solver=SmallLeastSquares())
     sol = optx.least_squares(_residual, solver, theta0, args=args, max_steps=spec.max_steps,
                              throw=False)
@@ -249,16 +249,18 @@ def _solve_one(spec: SolverSpec, t: jax.Array, y: jax.Array, m: jax.Array,
 
 def chunk_function(spec: SolverSpec) -> Any:
     """The traceable fit of one chunk: ``(t, y, m, duration, theta0, ramp, second,
-    fit_duration) -> (theta, code, n_steps)`` with ``(n_rows, n_points)`` float64 t, y and m
-    (1.0 where a point is real), ``(n_rows,)`` duration in s (inf: none), ``(n_rows, 3)``
-    starts, and three unbatched bool flags; ``(n_rows, 3)``, ``(n_rows,)``, ``(n_rows,)``
-    out."""
+    fit_duration, rtol, atol) -> (theta, code, n_steps)`` with ``(n_rows, n_points)``
+    float64 t, y and m (1.0 where a point is real), ``(n_rows,)`` duration in s (inf:
+    none), ``(n_rows, 3)`` starts, three unbatched bool flags and the two unbatched float64
+    stopping tolerances; ``(n_rows, 3)``, ``(n_rows,)``, ``(n_rows,)`` out."""
 
     def solve(t: jax.Array, y: jax.Array, m: jax.Array, duration: jax.Array,
               theta0: jax.Array, ramp: jax.Array, second: jax.Array,
-              fit_duration: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+              fit_duration: jax.Array, rtol: jax.Array, atol: jax.Array
+              ) -> tuple[jax.Array, jax.Array, jax.Array]:
         flags = Flags(ramp, second, fit_duration)
-        return jax.vmap(lambda *a: _solve_one(spec, *a, flags))(t, y, m, duration, theta0)
+        return jax.vmap(lambda *a: _solve_one(spec, *a, flags, rtol, atol))(
+            t, y, m, duration, theta0)
 
     return solve
 
