@@ -21,6 +21,8 @@ from ._errors import Flag, run_guarded, seconds_as_ms
 FLAGS: dict[str, Flag] = {
     "bin_s": ("--bin-ms", seconds_as_ms),
     "regions": "--regions",
+    "channels": "--channels",
+    "reduce": "--reduce",
 }
 
 
@@ -39,6 +41,11 @@ class Regions(enum.StrEnum):
 class Solver(enum.StrEnum):
     levenberg_marquardt = "levenberg_marquardt"
     gauss_newton = "gauss_newton"
+
+
+class Reduce(enum.StrEnum):
+    none = "none"
+    mean = "mean"
 
 
 class CurveModel(enum.StrEnum):
@@ -93,9 +100,12 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
                ("status", "left"), ("steps", "right"), ("order", "left")]
     if units is None:
         columns.insert(2, ("units", "left"))
+    per_channel = any("channel" in r for r in records)
+    if per_channel:
+        columns[1:1] = [("channel", "left"), ("region", "left")]
     has_force = any(r.get("force_level", r.get("force_grade")) is not None for r in records)
     if not has_force:
-        columns.pop(1)
+        columns.pop(3 if per_channel else 1)
     for col, justify in columns:
         table.add_column(col, justify=justify)
     failed = [r for r in records if r["status"] != "converged"]
@@ -118,8 +128,10 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
         ]
         if units is None:
             cells.insert(2, r["units"])
+        if per_channel:
+            cells[1:1] = [str(r["channel"]), str(r["region"])]
         if not has_force:
-            cells.pop(1)
+            cells.pop(3 if per_channel else 1)
         table.add_row(*cells)
     if len(shown) < len(records):
         table.caption = (f"{len(records) - len(shown)} converged trials not shown; "
@@ -142,7 +154,7 @@ def fit_fos_command(
     files: Annotated[list[Path], typer.Argument(
         help="A tactile HDF5 file, or one or more two-column CSV curves (header, then t in "
              "s and the response), fitted together.",
-        show_default=False)],
+        show_default=False, metavar="FILE")],
     kind: Annotated[Kind | None, typer.Option(
         help="Regions to fit (HDF5): press, slip or both; default both.",
         show_default=False)] = None,
@@ -184,15 +196,29 @@ def fit_fos_command(
         help="Also fit the second-order alternative and give the BIC verdict.")] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON.")] = False,
     csv_out: Annotated[Path | None, typer.Option(
-        "--csv", help="Also write the table to this CSV file.", show_default=False)] = None,
+        "--csv", help="Also write the table to this CSV file.", show_default=False,
+        metavar="FILE")] = None,
     plot: Annotated[Path | None, typer.Option(
         help="Folder for PNG figures of data and fitted curves (like the paper's Figs. "
              "11-12); a CSV curve's figure is named after its file.",
-        show_default=False)] = None,
+        show_default=False, metavar="FOLDER")] = None,
     overwrite: Annotated[bool, typer.Option(
         help="Replace existing fit groups in the HDF5 file, and an existing --csv file.")] = False,
     no_write: Annotated[bool, typer.Option(
         "--no-write", help="Do not write the fits into the HDF5 file.")] = False,
+    stream: Annotated[str | None, typer.Option(
+        help="Fit step responses of this sampled stream of the HDF5 file (any stream, in "
+             "its own units) over the trials' annotated regions, instead of event counts. "
+             "Nothing is written into the file.", show_default=False)] = None,
+    channels: Annotated[str | None, typer.Option(
+        help="Channels of --stream to fit: glob(s), comma-separated, e.g. 'fz_*'; "
+             "default all.", show_default=False)] = None,
+    reduce: Annotated[Reduce, typer.Option(
+        help="With --stream: fit every channel (none) or the channels' mean.")
+    ] = Reduce.none,
+    region_label: Annotated[str | None, typer.Option(
+        help="With --stream: fit the annotations with this label (e.g. press); default "
+             "every annotation.", show_default=False)] = None,
 ) -> None:
     """Fit first-order-system models to the press (eq. 16) and slip (eq. 17) regions of
     every trial, all trials at once (paper 000, sec. 4.2).
@@ -223,6 +249,27 @@ def fit_fos_command(
         if csv_out is not None and csv_out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
         hdf5 = [f for f in files if is_hdf5(f)]
+        if stream is None:
+            for flag, value in (("--channels", channels), ("--region-label", region_label),
+                                ("--reduce", None if reduce == Reduce.none else reduce)):
+                if value is not None:
+                    raise InputError(f"{flag} applies with --stream NAME (a sampled stream "
+                                     "of an HDF5 file)")
+        if stream is not None:
+            if not hdf5 or len(files) > 1:
+                raise InputError("--stream fits a sampled stream of one tactile HDF5 file",
+                                 path=files[0])
+            for flag, value in (("--kind", kind), ("--regions", regions), ("--bin-ms", bin_ms),
+                                ("--units", units), ("--press-duration", press_duration)):
+                if value is not None:
+                    raise InputError(f"{flag} does not apply with --stream: the stream's "
+                                     "annotated regions are fitted with the step model, in "
+                                     "the stream's units", path=files[0])
+            if model is not None and model != CurveModel.step:
+                raise InputError(f"--stream fits the step model; --model {model.value} is "
+                                 "not supported for streams yet", path=files[0])
+            _report(_fit_stream(hdf5[0]))
+            return
         if hdf5 and len(files) > 1:
             raise InputError("fit-fos takes one HDF5 file per call; several inputs must all "
                              "be CSV curves", path=hdf5[0])
@@ -273,7 +320,8 @@ def fit_fos_command(
                 "bin_ms": bin_ms, "press_duration_s": press_duration, "solver": solver.value,
                 "max_steps": max_steps, "rtol": opts.rtol, "atol": opts.atol,
                 "p0": None if opts.p0 is None else dict(opts.p0), "order": order,
-                "criterion": "bic", "units": units}
+                "criterion": "bic", "units": units, "stream": stream, "channels": channels,
+                "reduce": reduce.value, "region_label": region_label}
 
     def _fit_h5(path: Path) -> dict[str, Any]:
         from ..fos.fit_file import fit_fos_file
@@ -308,6 +356,27 @@ def fit_fos_command(
                 "fits": {"curve": rf}, "labels": None, "records": {"curve": fit_records(rf)},
                 "written": {}, "quantities": [c.quantity for c in curves]}
 
+    def _fit_stream(path: Path) -> dict[str, Any]:
+        from ..fos.protocol import fit_curves
+        from ..fos.stream import read_stream_curves
+        from ..fos.table import fit_records
+
+        curves = read_stream_curves(path, stream, channels=channels, reduce=reduce.value,
+                                    region_label=region_label)
+        enable_compilation_cache()
+        with _Status("fitting (the first run compiles the solver)"):
+            rf = fit_curves([(c.t_s, c.x) for c in curves], model="step",
+                            names=[c.name for c in curves], units=[c.units for c in curves],
+                            order=order, options=options())
+        records = fit_records(rf)
+        for c, rec in zip(curves, records, strict=True):
+            rec.update({"trial": c.trial, "channel": c.channel, "region": c.region,
+                        "stream": stream, "baseline": c.baseline,
+                        "region_start_s": c.start_s, "region_end_s": c.end_s})
+        return {"files": [str(path)], "input": "stream", "bin_s": None,
+                "fits": {stream: rf}, "labels": None, "records": {stream: records},
+                "written": {}, "quantities": [stream] * len(curves)}
+
     def _report(result: dict[str, Any]) -> None:
         from ..fos.table import write_csv
 
@@ -319,7 +388,7 @@ def fit_fos_command(
 
             with output_folder(plot, merge=True) as tmp:  # in place when every page is
                 for region, rf in result["fits"].items():
-                    if region == "curve":
+                    if region == "curve" or result["input"] == "stream":
                         pages = plot_curve_fits(rf, tmp, quantities=result["quantities"])
                     elif region in result["records"]:
                         pages = plot_region_fits(rf, tmp, labels=result["labels"])

@@ -20,7 +20,7 @@ NO_COLUMNS = {"COLUMNS": None, "TERMINAL_WIDTH": None}
 #: Placeholders of path arguments and options.
 PATH_METAVARS = {"FILE", "FOLDER", "RUN", "INPUT", "CONFIG", "CSV"}
 #: Commands whose files are being edited elsewhere; their placeholders come with that work.
-NOT_YET = {"fit-fos"}
+NOT_YET: set[str] = set()
 
 
 def _commands(group, path=()):
