@@ -339,7 +339,7 @@ def load_perturbation(path: str | Path) -> PerturbResult:
     """Read a perturb.json (or the folder holding it), checked: strict JSON, an object of
     format ``tactile-perturb``, every record complete and of the right type. Any problem is
     one InputError naming the file and how to re-create it."""
-    from .runs import _parse_json
+    from .runs import _parse_json, checked_record
 
     path = Path(path)
     if path.is_dir():
@@ -347,12 +347,8 @@ def load_perturbation(path: str | Path) -> PerturbResult:
     redo = "re-create it with `tactile perturb RUN --data FILE`"
     if not path.is_file():
         raise InputError(f"no perturb.json; {redo}", path=path)
-    d = _parse_json(path, redo)
-    if not isinstance(d, dict):
-        raise InputError(f"perturb.json is not a JSON object; {redo}", path=path)
-    if d.get("format") != PERTURB_FORMAT:
-        raise InputError(f"format is {d.get('format')!r}, not {PERTURB_FORMAT!r}; {redo}",
-                         path=path)
+    d = checked_record(_parse_json(path, redo), path, fmt=PERTURB_FORMAT, version=None,
+                       redo=redo)
     kinds = d.get("kinds")
     if not isinstance(kinds, list) or not all(
             isinstance(k, dict) and isinstance(k.get("levels"), list)

@@ -172,6 +172,25 @@ def _parse_json(path: Path, redo: str) -> Any:
         raise InputError(f"not valid JSON ({_first_line(exc)}); {redo}", path=path) from None
 
 
+def checked_record(obj: Any, path: Path, *, fmt: str, version: int | None, redo: str,
+                   what_version: str | None = None, redo_version: str | None = None
+                   ) -> dict[str, Any]:
+    """``obj`` (parsed JSON of file ``path``) if it is an object of format ``fmt`` and, unless
+    ``version`` is None, of ``format_version`` ``version``; else one InputError naming the
+    file that ends with ``redo`` (``redo_version`` for a version this tool cannot read)."""
+    name = path.name
+    if not isinstance(obj, dict):
+        raise InputError(f"{name} is not a JSON object; {redo}", path=path)
+    if obj.get("format") != fmt:
+        raise InputError(f"{name} format is {obj.get('format')!r}, not {fmt!r}; {redo}",
+                         path=path)
+    if version is not None and obj.get("format_version") != version:
+        raise InputError(f"{what_version or name} format version {obj.get('format_version')} "
+                         f"cannot be read by tactile {__version__} (reads {version}); "
+                         f"{redo_version or redo}", path=path)
+    return obj
+
+
 def _finite_list(value: Any, key: str, n: int | None, path: Path, *,
                  positive: bool = False) -> np.ndarray:
     """``value`` as a (n,) float64 array of finite numbers (> 0 with ``positive``)."""
@@ -285,16 +304,9 @@ def read_run_info(path: str | Path) -> dict[str, Any]:
     command that re-creates it."""
     path = _run_folder(path)
     info_path = path / RUN_JSON
-    info = _read_json(info_path, path)
-    if not isinstance(info, dict):
-        raise InputError(f"run.json is not a JSON object; {_RETRAIN}", path=info_path)
-    if info.get("format") != RUN_FORMAT:
-        raise InputError(f"run.json format is {info.get('format')!r}, not {RUN_FORMAT!r}; "
-                         f"{_RETRAIN}", path=info_path)
-    if info.get("format_version") != RUN_FORMAT_VERSION:
-        raise InputError(f"run folder format version {info.get('format_version')} cannot be "
-                         f"read by tactile {__version__} (reads {RUN_FORMAT_VERSION}); "
-                         "re-create it with this version's `tactile train`", path=info_path)
+    info = checked_record(_read_json(info_path, path), info_path, fmt=RUN_FORMAT,
+                          version=RUN_FORMAT_VERSION, redo=_RETRAIN, what_version="run folder",
+                          redo_version="re-create it with this version's `tactile train`")
     if "heads" not in info:
         raise InputError(f"run.json has no `heads`; {_RETRAIN}", path=info_path)
     data = info.get("data", [])
@@ -339,16 +351,8 @@ def read_metrics(path: str | Path) -> dict[str, Any]:
     of format ``tactile-eval`` version 1 whose ``heads`` map each head to its metrics."""
     path = Path(path)
     redo = "re-create it with `tactile evaluate` (`overwrite=True`)"
-    m = _parse_json(path, redo)
-    if not isinstance(m, dict):
-        raise InputError(f"metrics.json is not a JSON object; {redo}", path=path)
-    if m.get("format") != EVAL_FORMAT:
-        raise InputError(f"metrics.json format is {m.get('format')!r}, not {EVAL_FORMAT!r}; "
-                         f"{redo}", path=path)
-    if m.get("format_version") != EVAL_FORMAT_VERSION:
-        raise InputError(f"metrics.json format version {m.get('format_version')} cannot be "
-                         f"read by tactile {__version__} (reads {EVAL_FORMAT_VERSION}); {redo}",
-                         path=path)
+    m = checked_record(_parse_json(path, redo), path, fmt=EVAL_FORMAT,
+                       version=EVAL_FORMAT_VERSION, redo=redo)
     heads = m.get("heads")
     if not isinstance(heads, dict) or not all(
             isinstance(h, dict) and isinstance(h.get("kind"), str) for h in heads.values()):
@@ -433,6 +437,7 @@ def eval_dir_name(data_paths: list[Path], split: str) -> str:
 
 __all__ = ["CONFIG_YAML", "CURVES_PNG", "EVAL_DIR", "EVAL_FORMAT", "EVAL_FORMAT_VERSION",
            "HISTORY_CSV", "METRICS_JSON", "MODEL_PT", "NORMALISATION_JSON", "PREDICTIONS_CSV",
-           "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "dumps",
+           "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "checked_record",
+           "dumps",
            "eval_dir_name", "json_safe", "load_run", "read_metrics", "read_run_config",
            "read_run_info", "write_folder", "write_json"]
