@@ -23,6 +23,8 @@ FLAGS: dict[str, Flag] = {
     "regions": "--regions",
     "channels": "--channels",
     "reduce": "--reduce",
+    "region_label": "--region-label",
+    "min_snr": "--min-snr",
 }
 
 
@@ -80,6 +82,14 @@ def _summary(records: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def _verdict_cell(r: dict[str, Any]) -> str:
+    """The order verdict; a relaxation with its share and time constant."""
+    if r["order_verdict"] == "relaxation" and r.get("relax_fraction") is not None:
+        return (f"relaxation ({100 * r['relax_fraction']:.0f} % over "
+                f"{r['relax_tau_s']:.3g} s)")
+    return r["order_verdict"]
+
+
 def _units_of(records: list[dict[str, Any]]) -> str | None:
     """The one unit of every row, or None when the rows differ (curves in several units)."""
     units = {r["units"] for r in records}
@@ -124,7 +134,7 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
             "-" if r["pearson_r"] is None else f"{r['pearson_r']:.5f}",
             _pm(r["residual_std"], None, ".4g"), _pm(r["rss"], None, ".4g"),
             f"[red]{r['status']}[/]" if bad else r["status"], str(r["n_steps"]),
-            r["order_verdict"],
+            _verdict_cell(r),
         ]
         if units is None:
             cells.insert(2, r["units"])
@@ -152,22 +162,24 @@ def _print_region(console: Console, region: str, model: str, records: list[dict[
 
 def fit_fos_command(
     files: Annotated[list[Path], typer.Argument(
-        help="A tactile HDF5 file, or one or more two-column CSV curves (header, then t in "
-             "s and the response), fitted together.",
+        help="A tactile HDF5 file, or CSV curves fitted together: files or folders of "
+             "them, each a header, then t in s and one or more response columns "
+             "(t,x1,x2,...).",
         show_default=False, metavar="FILE")],
     kind: Annotated[Kind | None, typer.Option(
         help="Regions to fit (HDF5): press, slip or both; default both.",
         show_default=False)] = None,
     regions: Annotated[Regions | None, typer.Option(
         help="Where the regions come from (HDF5): the trials' annotations, detected in the "
-             "counts, or auto (annotations where present; the default).",
+             "counts (with --stream: steps found in the signal), or auto (annotations where "
+             "present; the default; with --stream the default is annotations).",
         show_default=False)] = None,
     bin_ms: Annotated[float | None, typer.Option(
         min=0.001, help="Bin width in ms (HDF5); default 20 for events, a count stream's "
                         "own width.", show_default=False)] = None,
     model: Annotated[CurveModel | None, typer.Option(
-        help="Model for CSV curves: pulse (eq. 16), step or ramp (eq. 17).",
-        show_default=False)] = None,
+        help="Model for CSV curves and --stream: pulse (eq. 16), step or ramp (eq. 17); "
+             "--stream defaults to step.", show_default=False)] = None,
     units: Annotated[str | None, typer.Option(
         help="Unit of the CSV curves' response (and so of alpha); default: the unit in the "
              "response column's header, as in 'force (N)', else 'units'.",
@@ -207,9 +219,9 @@ def fit_fos_command(
     no_write: Annotated[bool, typer.Option(
         "--no-write", help="Do not write the fits into the HDF5 file.")] = False,
     stream: Annotated[str | None, typer.Option(
-        help="Fit step responses of this sampled stream of the HDF5 file (any stream, in "
-             "its own units) over the trials' annotated regions, instead of event counts. "
-             "Nothing is written into the file.", show_default=False)] = None,
+        help="Fit responses of this sampled stream of the HDF5 file (any stream, in its own "
+             "units) over the trials' annotated regions or steps found in it, instead of "
+             "event counts. Nothing is written into the file.", show_default=False)] = None,
     channels: Annotated[str | None, typer.Option(
         help="Channels of --stream to fit: glob(s), comma-separated, e.g. 'fz_*'; "
              "default all.", show_default=False)] = None,
@@ -217,8 +229,13 @@ def fit_fos_command(
         help="With --stream: fit every channel (none) or the channels' mean.")
     ] = Reduce.none,
     region_label: Annotated[str | None, typer.Option(
-        help="With --stream: fit the annotations with this label (e.g. press); default "
-             "every annotation.", show_default=False)] = None,
+        help="With --stream: fit the regions with this label (an annotation's, e.g. press; "
+             "found ones are rise, fall, or pulse with --model pulse); default all.",
+        show_default=False)] = None,
+    min_snr: Annotated[float | None, typer.Option(
+        min=0.001, help="With --stream --regions detect/auto: a step's change over "
+                        "~1.6 time constants must exceed this many times its noise; "
+                        "default 8.", show_default=False)] = None,
 ) -> None:
     """Fit first-order-system models to the press (eq. 16) and slip (eq. 17) regions of
     every trial, all trials at once (paper 000, sec. 4.2).
@@ -234,13 +251,14 @@ def fit_fos_command(
     """
 
     def body() -> None:
+        from ..fos.curve_csv import csv_inputs
         from ..store.outdir import check_output_folder
         from ..store.trials import is_hdf5
 
         options()  # bad --rtol, --atol or --p0: one line before any file is read
 
         for file in files:
-            if not file.is_file():
+            if not (file.is_file() or file.is_dir()):
                 raise InputError("file not found", path=file)
         if plot is not None:  # figures are added to an existing folder; a file there is not
             check_output_folder(plot, merge=True)
@@ -248,10 +266,11 @@ def fit_fos_command(
             raise InputError("is a folder; give a file name for --csv", path=csv_out)
         if csv_out is not None and csv_out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=csv_out)
-        hdf5 = [f for f in files if is_hdf5(f)]
+        hdf5 = [f for f in files if f.is_file() and is_hdf5(f)]
         if stream is None:
             for flag, value in (("--channels", channels), ("--region-label", region_label),
-                                ("--reduce", None if reduce == Reduce.none else reduce)):
+                                ("--reduce", None if reduce == Reduce.none else reduce),
+                                ("--min-snr", min_snr)):
                 if value is not None:
                     raise InputError(f"{flag} applies with --stream NAME (a sampled stream "
                                      "of an HDF5 file)")
@@ -259,15 +278,13 @@ def fit_fos_command(
             if not hdf5 or len(files) > 1:
                 raise InputError("--stream fits a sampled stream of one tactile HDF5 file",
                                  path=files[0])
-            for flag, value in (("--kind", kind), ("--regions", regions), ("--bin-ms", bin_ms),
-                                ("--units", units), ("--press-duration", press_duration)):
+            for flag, value in (("--kind", kind), ("--bin-ms", bin_ms), ("--units", units)):
                 if value is not None:
                     raise InputError(f"{flag} does not apply with --stream: the stream's "
-                                     "annotated regions are fitted with the step model, in "
-                                     "the stream's units", path=files[0])
-            if model is not None and model != CurveModel.step:
-                raise InputError(f"--stream fits the step model; --model {model.value} is "
-                                 "not supported for streams yet", path=files[0])
+                                     "regions are fitted with --model, in the stream's units",
+                                     path=files[0])
+            if press_duration is not None and model != CurveModel.pulse:
+                raise InputError("--press-duration applies with --model pulse", path=files[0])
             _report(_fit_stream(hdf5[0]))
             return
         if hdf5 and len(files) > 1:
@@ -288,14 +305,7 @@ def fit_fos_command(
                                      "fitted with --model", path=files[0])
             if model is None:
                 raise InputError("a CSV curve needs --model pulse, step or ramp", path=files[0])
-            stems: dict[str, Path] = {}
-            for file in files:
-                if file.stem in stems:
-                    raise InputError(f"two inputs are named {file.stem!r} ({stems[file.stem]} "
-                                     "and this one); rows and figures are named after the "
-                                     "file, so rename one", path=file)
-                stems[file.stem] = file
-            result = _fit_csv(files)
+            result = _fit_csv(csv_inputs(files))
         _report(result)
 
     def options() -> Any:
@@ -316,7 +326,10 @@ def fit_fos_command(
 
     def config() -> dict[str, Any]:
         opts = options()
-        return {"kind": (kind or Kind.both).value, "regions": (regions or Regions.auto).value,
+        default_regions = Regions.annotations if stream is not None else Regions.auto
+        return {"kind": (kind or Kind.both).value,
+                "regions": (regions or default_regions).value,
+                "model": None if model is None else model.value, "min_snr": min_snr,
                 "bin_ms": bin_ms, "press_duration_s": press_duration, "solver": solver.value,
                 "max_steps": max_steps, "rtol": opts.rtol, "atol": opts.atol,
                 "p0": None if opts.p0 is None else dict(opts.p0), "order": order,
@@ -341,11 +354,19 @@ def fit_fos_command(
                 "written": result.written}
 
     def _fit_csv(paths: list[Path]) -> dict[str, Any]:
-        from ..fos.curve_csv import read_curve
+        from ..fos.curve_csv import read_curves
         from ..fos.protocol import DEFAULT_UNITS, fit_curves
         from ..fos.table import fit_records
 
-        curves = [read_curve(p) for p in paths]
+        curves, where = [], {}
+        for p in paths:
+            for c in read_curves(p):
+                if c.name in where:
+                    raise InputError(f"two curves are named {c.name!r} ({where[c.name]} and "
+                                     "this file); rows and figures are named after the file "
+                                     "(and column), so rename one", path=p)
+                where[c.name] = p
+                curves.append(c)
         enable_compilation_cache()
         with _Status("fitting (the first run compiles the solver)"):
             rf = fit_curves([(c.t_s, c.x) for c in curves], model=model.value,
@@ -361,13 +382,17 @@ def fit_fos_command(
         from ..fos.stream import read_stream_curves
         from ..fos.table import fit_records
 
-        curves = read_stream_curves(path, stream, channels=channels, reduce=reduce.value,
-                                    region_label=region_label)
+        chosen = (model or CurveModel.step).value
+        found = read_stream_curves(
+            path, stream, channels=channels, reduce=reduce.value, region_label=region_label,
+            regions=(regions or Regions.annotations).value, model=chosen,
+            **({} if min_snr is None else {"min_snr": min_snr}))
+        curves = found.curves
         enable_compilation_cache()
         with _Status("fitting (the first run compiles the solver)"):
-            rf = fit_curves([(c.t_s, c.x) for c in curves], model="step",
+            rf = fit_curves([(c.t_s, c.x) for c in curves], model=chosen,
                             names=[c.name for c in curves], units=[c.units for c in curves],
-                            order=order, options=options())
+                            press_duration_s=press_duration, order=order, options=options())
         records = fit_records(rf)
         for c, rec in zip(curves, records, strict=True):
             rec.update({"trial": c.trial, "channel": c.channel, "region": c.region,
@@ -375,7 +400,8 @@ def fit_fos_command(
                         "region_start_s": c.start_s, "region_end_s": c.end_s})
         return {"files": [str(path)], "input": "stream", "bin_s": None,
                 "fits": {stream: rf}, "labels": None, "records": {stream: records},
-                "written": {}, "quantities": [stream] * len(curves)}
+                "written": {}, "quantities": [stream] * len(curves),
+                "no_step": {stream: found.no_step}}
 
     def _report(result: dict[str, Any]) -> None:
         from ..fos.table import write_csv
@@ -405,7 +431,9 @@ def fit_fos_command(
                 "regions": {
                     region: {"model": result["fits"][region].model,
                              "group": result["written"].get(region),
-                             "summary": summaries[region], "fits": recs}
+                             "summary": summaries[region], "fits": recs,
+                             **({"no_step": result["no_step"][region]}
+                                if "no_step" in result else {})}
                     for region, recs in result["records"].items()},
                 "csv": None if csv_out is None else str(csv_out), "figures": figures,
             }
@@ -415,6 +443,12 @@ def fit_fos_command(
         for region, recs in result["records"].items():
             _print_region(console, region, result["fits"][region].model, recs,
                           summaries[region], result["written"].get(region))
+            missed = result.get("no_step", {}).get(region, [])
+            if missed:
+                shown = ", ".join(missed[:10]) + (f", ... ({len(missed)} in all)"
+                                                  if len(missed) > 10 else "")
+                console.print(f"  no step found (not fitted) in {len(missed)} curve(s): "
+                              f"{shown}")
         if csv_out is not None:
             console.print(f"wrote {csv_out}")
         if figures:

@@ -19,17 +19,24 @@ MAX_TRIALS_SHOWN = 40
 
 
 def info_command(
-    file: Annotated[Path, typer.Argument(help="A tactile HDF5 file.", metavar="FILE",
-                                         show_default=False)],
+    file: Annotated[Path, typer.Argument(help="A tactile HDF5 file (or a raw AEDAT4 file).",
+                                         metavar="FILE", show_default=False)],
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print the summary as JSON (every channel name and label value).")
     ] = False,
 ) -> None:
     """Print sensors (streams, rate, channels, units), trials, trial labels (trials per
     value), per-sample labels (samples per class) and splits of a tactile HDF5 file: what a
-    train config names. Labels with many values are summarised; --json lists everything."""
+    train config names. Labels with many values are summarised; --json lists everything.
+    A raw .aedat4 recording is read without writing anything: its streams (type, name,
+    count, time span, size); other commands need it ingested first."""
 
     def body() -> None:
+        from ..ingest.aedat4_describe import is_aedat4
+
+        if is_aedat4(file):
+            _aedat4(file, as_json)
+            return
         summary = summarize(file)  # every read failure is one InputError naming the path
         if as_json:
             typer.echo(json.dumps(summary.as_dict(), indent=2))
@@ -45,6 +52,30 @@ def info_command(
         console.print(_splits(summary), highlight=False)
 
     run_guarded(body)
+
+
+def _aedat4(file: Path, as_json: bool) -> None:
+    from ..ingest.aedat4_describe import describe_aedat4
+
+    summary = describe_aedat4(file)  # a damaged file is one InputError naming it
+    if as_json:
+        typer.echo(json.dumps(summary.as_dict(), indent=2))
+        return
+    console = Console(width=None if sys.stdout.isatty() else 150)
+    console.print(f"[bold]{summary.file}[/] AEDAT4 recording, {summary.size_bytes:,} bytes, "
+                  f"{len(summary.streams)} stream(s)", highlight=False)
+    table = Table(title="Streams")
+    for col in ("id", "type", "name", "camera", "count", "first t (us)", "span (s)",
+                "resolution"):
+        table.add_column(col)
+    for s in summary.streams:
+        count = f"{s.count:,} {s.unit}" if s.count is not None else "not readable"
+        span = s.span_s
+        table.add_row(str(s.stream_id), s.type, s.name, s.camera or "", count,
+                      "" if s.t_first_us is None else str(s.t_first_us),
+                      "" if span is None else f"{span:.6f}", s.resolution)
+    console.print(table)
+    console.print(summary.hint, highlight=False, soft_wrap=True)
 
 
 def _sensors(summary: FileSummary) -> Table:

@@ -24,6 +24,15 @@ Verdicts, per trial:
   (A better second-order optimum far from the FOS solution would be missed; the
   tests and benchmarks/fos_stability.py measure how often that happens for second-order
   and saturating data.)
+- ``"relaxation"`` (step responses only): the second order wins, and what it found is a
+  first-order rise followed by a slower relaxation back towards a lower level (a press that
+  creeps back, as elastomer skins and taxel pads do): two real poles, and a zero slower than
+  the slow pole, so the slow mode's share is positive. The step response is then
+  ``alpha (1 + c_f exp(-t/tau_f) + c_s exp(-t/tau_s))`` with ``c_s > 0``: the response rises
+  with ``tau_f`` (``rise_tau_s``) to about ``alpha (1 + c_s)`` and relaxes with ``tau_s``
+  (``relax_tau_s``) by ``relax_fraction = c_s / (1 + c_s)`` of that level. Not first order.
+  (Every two-mode relaxation ``a (1 - exp(-t/tau_f)) - b (1 - exp(-t/tau_s))`` is such a
+  second-order response, so no separate fit is needed: the criterion already compared it.)
 - ``"undecided"``: the first-order fit failed, or the second-order one gave no finite
   residual.
 """
@@ -52,7 +61,12 @@ class OrderSelection:
     second: FosFitResult  #: NaN parameters where the second-order fit did not converge
     delta_aic: np.ndarray  #: aic(first) - aic(second); > 0 favours the second order
     delta_bic: np.ndarray  #: bic(first) - bic(second)
-    verdict: np.ndarray  #: "first_order" | "second_order" | "undecided", by `criterion`
+    verdict: np.ndarray  #: "first_order" | "second_order" | "relaxation" | "undecided"
+    #: (n_trials,) for ``relaxation`` verdicts (else NaN): the share of the peak level lost
+    #: to the relaxation, its time constant in s, and the rise's time constant in s.
+    relax_fraction: np.ndarray | None = None
+    relax_tau_s: np.ndarray | None = None
+    rise_tau_s: np.ndarray | None = None
 
     @property
     def delta(self) -> np.ndarray:
@@ -73,6 +87,10 @@ class OrderSelection:
                                    "criterion": self.criterion, "min_delta": self.min_delta,
                                    "delta_aic": _finite(self.delta_aic[i]),
                                    "delta_bic": _finite(self.delta_bic[i])}
+            if self.relax_fraction is not None:
+                row.update({"relax_fraction": _finite(self.relax_fraction[i]),
+                            "relax_tau_s": _finite(self.relax_tau_s[i]),
+                            "rise_tau_s": _finite(self.rise_tau_s[i])})
             row.update({f"first_{k}": v for k, v in r1.items() if k != "trial"})
             row.update({f"second_{k}": v for k, v in r2.items() if k != "trial"})
             out.append(row)
@@ -89,6 +107,29 @@ def _verdicts(first_ok: np.ndarray, delta: np.ndarray, min_delta: float) -> np.n
     usable = first_ok & np.isfinite(delta)
     return np.where(usable & (delta > min_delta), "second_order",
                     np.where(usable, "first_order", "undecided"))
+
+
+def relaxation_shape(second: FosFitResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(relax_fraction, relax_tau_s, rise_tau_s)``, (n_trials,) each, of second-order step
+    fits: NaN where the fit did not converge, its poles are complex (zeta < 1) or its slow
+    mode does not relax (``c_s <= 0``, see the module doc).
+
+    With real poles ``tau^2 s^2 + 2 zeta tau s + 1 = (1 + tau_f s)(1 + tau_s s)`` and the zero
+    ``lead``, the slow mode's coefficient is ``c_s = (lead - tau_s) / (tau_s - tau_f)``, so
+    ``relax_fraction = c_s / (1 + c_s) = (lead - tau_s) / (lead - tau_f)``.
+    """
+    tau, zeta, lead = (np.asarray(a, dtype=np.float64)
+                       for a in (second.tau_s, second.zeta, second.lead_s))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        root = np.sqrt(np.maximum(zeta * zeta - 1.0, 0.0))
+        slow = tau * (zeta + root)
+        fast = tau / (zeta + root)  # tau^2 / slow, without cancellation
+        relaxing = (np.asarray(second.status) == "converged") & (zeta >= 1.0) & (lead > slow) \
+            & (slow > fast)
+        fraction = (lead - slow) / (lead - fast)
+    nan = np.full(tau.shape, np.nan)
+    return (np.where(relaxing, fraction, nan), np.where(relaxing, slow, nan),
+            np.where(relaxing, fast, nan))
 
 
 def select_order(
@@ -129,7 +170,15 @@ def select_order(
     nan_unless_first = np.where(first.ok, 1.0, np.nan)
     delta_aic = (first.aic - second.aic) * nan_unless_first
     delta_bic = (first.bic - second.bic) * nan_unless_first
+    verdict = _verdicts(first.ok, delta_aic if criterion == "aic" else delta_bic, min_delta)
+    second = second.drop_failed()
+    shape: tuple[np.ndarray | None, ...] = (None, None, None)
+    if kind == "step":  # a relaxing step is told apart from other second-order shapes
+        fraction, slow, fast = relaxation_shape(second)
+        relaxing = (verdict == "second_order") & np.isfinite(fraction)
+        verdict = np.where(relaxing, "relaxation", verdict)
+        shape = tuple(np.where(relaxing, a, np.nan) for a in (fraction, slow, fast))
     return OrderSelection(
-        criterion=criterion, min_delta=float(min_delta), first=first,
-        second=second.drop_failed(), delta_aic=delta_aic, delta_bic=delta_bic,
-        verdict=_verdicts(first.ok, delta_aic if criterion == "aic" else delta_bic, min_delta))
+        criterion=criterion, min_delta=float(min_delta), first=first, second=second,
+        delta_aic=delta_aic, delta_bic=delta_bic, verdict=verdict, relax_fraction=shape[0],
+        relax_tau_s=shape[1], rise_tau_s=shape[2])

@@ -15,7 +15,8 @@ with a mask, by :func:`tactile_cli.fos.fit_pulse` / :func:`~tactile_cli.fos.fit_
    as well, and reports only the slip.)
 3. **Model order**: with ``order=True`` each region is also fitted with the second-order
    alternative and :func:`tactile_cli.fos.select_order` gives the verdict by BIC
-   (``first_order``, ``second_order`` or ``undecided``; ``not_tested`` without it). The
+   (``first_order``, ``second_order``, for step curves ``relaxation``, or ``undecided``;
+   ``not_tested`` without it). The
    first-order results are those of the same call (identical to ``fit_pulse``/``fit_ramp``).
 
 A failed fit is kept in the results with its status (parameters NaN), never dropped.
@@ -77,6 +78,10 @@ class RegionFits:
     status: np.ndarray
     detail: np.ndarray | None = None
     units: tuple[str, ...] | None = None
+    #: Step fits with the order tested: ``relax_fraction``, ``relax_tau_s`` and
+    #: ``rise_tau_s`` (n,) of :class:`tactile_cli.fos.OrderSelection` (NaN unless the
+    #: verdict is ``relaxation``); None otherwise.
+    relaxation: dict[str, np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.trials)
@@ -139,17 +144,30 @@ def _fit(model: str, t: np.ndarray, y: np.ndarray, m: np.ndarray, *,
          duration_s: ArrayLike | None, order: bool, options: FitOptions
          ) -> tuple[FosFitResult, np.ndarray, np.ndarray]:
     """First-order fit, verdict and delta BIC of one model over all rows."""
+    fit, verdict, delta, _ = _fit_shaped(model, t, y, m, duration_s=duration_s, order=order,
+                                         options=options)
+    return fit, verdict, delta
+
+
+def _fit_shaped(model: str, t: np.ndarray, y: np.ndarray, m: np.ndarray, *,
+                duration_s: ArrayLike | None, order: bool, options: FitOptions
+                ) -> tuple[FosFitResult, np.ndarray, np.ndarray, dict[str, np.ndarray] | None]:
+    """:func:`_fit`, and the relaxation columns of step fits whose order was tested."""
     if order:
         sel = select_order(model, t, y, m, duration_s=duration_s if model == "pulse" else None,
                            criterion="bic", options=options)
-        return sel.first, sel.verdict.astype(str), sel.delta_bic
+        shape = None
+        if sel.relax_fraction is not None:
+            shape = {"relax_fraction": sel.relax_fraction, "relax_tau_s": sel.relax_tau_s,
+                     "rise_tau_s": sel.rise_tau_s}
+        return sel.first, sel.verdict.astype(str), sel.delta_bic, shape
     if model == "pulse":
         fit = fit_pulse(t, y, m, duration_s=duration_s, options=options)
     elif model == "ramp":
         fit = fit_ramp(t, y, m, options=options)
     else:
         fit = fit_step(t, y, m, options=options)
-    return fit, np.full(len(fit), NOT_TESTED), np.full(len(fit), np.nan)
+    return fit, np.full(len(fit), NOT_TESTED), np.full(len(fit), np.nan), None
 
 
 def _check_duration(press_duration_s: float | None) -> None:
@@ -257,12 +275,12 @@ def fit_curves(
     t, y, m = np.zeros((n, width)), np.zeros((n, width)), np.zeros((n, width), bool)
     for row, (ti, xi) in enumerate(arrays):
         t[row, :len(ti)], y[row, :len(xi)], m[row, :len(ti)] = ti, xi, True
-    fit, verdict, delta = _fit(model, t, y, m, duration_s=press_duration_s, order=order,
-                               options=options or FitOptions())
+    fit, verdict, delta, shape = _fit_shaped(model, t, y, m, duration_s=press_duration_s,
+                                             order=order, options=options or FitOptions())
     starts = np.array([ti[0] for ti, _ in arrays])
     ends = np.array([ti[-1] for ti, _ in arrays])
     return RegionFits("curve", model, names, starts, ends, t, y, m, fit, verdict, delta,
-                      fit.status.astype(str), units=units)
+                      fit.status.astype(str), units=units, relaxation=shape)
 
 
 def fit_curve(

@@ -9,6 +9,14 @@ baseline) is subtracted so that the response starts at zero as the step model
 length just before the region (within the trial), or, when the region starts at the first
 sample, the first sample of the region. ``alpha`` is then in the stream's units.
 
+Regions come from the trials' annotations (``regions="annotations"``), or are found in the
+signal (``"detect"``: :func:`tactile_cli.fos.step_detect.detect_steps` on each curve, that
+is on each channel, or on their mean with ``reduce="mean"``; regions labelled ``rise`` and
+``fall``), or from annotations where a trial has matching ones and found otherwise
+(``"auto"``). Curves in which no step is found are listed in :attr:`StreamCurves.no_step`,
+not fitted. With ``model="pulse"`` and found regions, a rise and the fall after it are one
+region labelled ``pulse`` (the press and its release; the pulse length T is then fitted).
+
 Channels are chosen by a glob (``fnmatch``, case-sensitive, several globs separated by
 commas) and fitted one by one (``reduce="none"``) or as their mean (``reduce="mean"``).
 Everything is read and checked before anything is fitted; all curves of the file are
@@ -26,8 +34,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..store.trials import TactileFile
+from .step_detect import MIN_SNR, detect_steps
 
 REDUCE_MODES: tuple[str, ...] = ("none", "mean")
+STREAM_REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
 
 
 @dataclass(frozen=True)
@@ -50,6 +60,15 @@ class StreamCurve:
         return f"{self.trial}/{self.channel}/{self.region}"
 
 
+@dataclass(frozen=True)
+class StreamCurves:
+    """The curves to fit, and the ``trial/channel`` names of curves with no step found
+    (``regions="detect"`` or ``"auto"``)."""
+
+    curves: list[StreamCurve]
+    no_step: list[str]
+
+
 def match_channels(names: Sequence[str], pattern: str | None) -> list[str]:
     """The channels of ``names`` matching any of the comma-separated globs of ``pattern``
     (all when None), in the stream's order; an empty list when none matches."""
@@ -67,6 +86,34 @@ def _baseline(t: np.ndarray, x: np.ndarray, start: float, end: float) -> float:
     return float(x[inside][0])
 
 
+def _numbered(spans: list[tuple[float, float, str]]) -> list[tuple[float, float, str]]:
+    """Regions named by their label, repeated labels numbered: press, press#2, ..."""
+    seen: dict[str, int] = {}
+    out = []
+    for start, end, label in spans:
+        seen[label] = seen.get(label, 0) + 1
+        out.append((start, end, label if seen[label] == 1 else f"{label}#{seen[label]}"))
+    return out
+
+
+def _found_regions(t_s: np.ndarray, x: np.ndarray, *, model: str, want: str | None,
+                   min_snr: float, min_points: int) -> list[tuple[float, float, str]]:
+    """Regions of the steps found in one curve: each step (``rise``/``fall``), or for
+    ``model="pulse"`` a step and the opposite step after it as one ``pulse``."""
+    steps = detect_steps(t_s, x, min_snr=min_snr, min_points=min_points)
+    spans = [(s.start_s, s.end_s, s.label) for s in steps]
+    if model == "pulse":  # pair each step with the opposite one after it, left to right
+        pulses, k = [], 0
+        while k + 1 < len(steps):
+            if steps[k + 1].label != steps[k].label:
+                pulses.append((steps[k].start_s, steps[k + 1].end_s, "pulse"))
+                k += 2
+            else:
+                k += 1
+        spans = pulses
+    return _numbered([sp for sp in spans if want is None or sp[2] == want])
+
+
 def read_stream_curves(
     source: str | Path | TactileFile,
     stream: str,
@@ -74,27 +121,39 @@ def read_stream_curves(
     channels: str | None = None,
     reduce: str = "none",
     region_label: str | None = None,
+    regions: str = "annotations",
+    model: str = "step",
+    min_snr: float = MIN_SNR,
     min_points: int = 4,
-) -> list[StreamCurve]:
-    """The step responses of ``stream`` over the annotated regions of every trial (see the
-    module doc). ``region_label``: only annotations with this label (case and surrounding
-    spaces ignored); None: every annotation.
+) -> StreamCurves:
+    """The responses of ``stream`` over the regions of every trial (see the module doc).
+    ``region_label``: only regions with this label (annotations: any label, case and
+    surrounding spaces ignored; found regions: ``rise``, ``fall`` or ``pulse``); None: all.
 
     Raises :class:`InputError` for a file without trials, a trial without the stream, a
     glob that matches no channel, channels of several units averaged, a trial without
-    (matching) annotations, or a region with fewer than ``min_points`` samples.
+    (matching) annotations, a region with fewer than ``min_points`` samples, or no step
+    found in any curve of the file.
     """
     if reduce not in REDUCE_MODES:
         raise ValueError(f"`reduce` (={reduce!r}) must be one of {REDUCE_MODES}.")
+    if regions not in STREAM_REGION_MODES:
+        raise ValueError(f"`regions` (={regions!r}) must be one of {STREAM_REGION_MODES}.")
     if not isinstance(source, TactileFile):
         with TactileFile(source) as tf:
             return read_stream_curves(tf, stream, channels=channels, reduce=reduce,
-                                      region_label=region_label, min_points=min_points)
+                                      region_label=region_label, regions=regions,
+                                      model=model, min_snr=min_snr, min_points=min_points)
     tf, path = source, source.path
     if not tf.trial_names:
         raise InputError("the file has no trials", path=path)
     want = None if region_label is None else region_label.strip().lower()
+    found_labels = ("pulse",) if model == "pulse" else ("rise", "fall")
+    if regions == "detect" and want is not None and want not in found_labels:
+        raise InputError(f"`region_label` (={region_label!r}): regions found in the signal "
+                         f"are labelled {' or '.join(found_labels)}", path=path)
     out: list[StreamCurve] = []
+    no_step: list[str] = []
     for name in tf.trial_names:
         trial = tf.trial(name)
         if not trial.has_signal(stream):
@@ -109,11 +168,13 @@ def read_stream_curves(
                              path=path, where=trial.where)
         annotations = [a for a in trial.annotations
                        if want is None or a.label.strip().lower() == want]
-        if not annotations:
+        detect = regions == "detect" or (regions == "auto" and not annotations)
+        if not detect and not annotations:
             what = "annotations" if want is None else f"annotations labelled {region_label!r}"
             raise InputError(f"no {what} to fit (labels: "
                              f"{', '.join(sorted({a.label for a in trial.annotations})) or 'none'}"
-                             "); add them at ingest (`tactile ingest --annotations FILE`)",
+                             "); add them at ingest (`tactile ingest --annotations FILE`) or "
+                             "find steps in the signal (`regions='detect'`)",
                              path=path, where=trial.where)
         sig = trial.signal(stream, channels=chosen)
         data = np.asarray(sig.data, dtype=np.float64)
@@ -127,22 +188,33 @@ def read_stream_curves(
             data = data.mean(axis=1, keepdims=True)
             labels = ["mean" if channels is None else f"mean({channels})"]
             units = units[:1]
-        seen: dict[str, int] = {}
-        for ann in annotations:
-            seen[ann.label] = seen.get(ann.label, 0) + 1
-            region = ann.label if seen[ann.label] == 1 else f"{ann.label}#{seen[ann.label]}"
-            inside = (sig.t_s >= ann.start_s) & (sig.t_s < ann.end_s)
-            if inside.sum() < min_points:
-                raise InputError(f"the {region!r} interval [{ann.start_s:g}, {ann.end_s:g}) s "
-                                 f"holds {int(inside.sum())} samples of stream {stream!r}; at "
-                                 f"least {min_points} are needed", path=path,
-                                 where=trial.where)
-            t = sig.t_s[inside] - ann.start_s
-            for c, label in enumerate(labels):
-                base = _baseline(sig.t_s, data[:, c], ann.start_s, ann.end_s)
-                out.append(StreamCurve(name, label, region, t, data[inside, c] - base,
-                                       units[c] or "units", ann.start_s, ann.end_s, base))
-    return out
+        shared = None if detect else _numbered([(a.start_s, a.end_s, a.label)
+                                                for a in annotations])
+        for c, label in enumerate(labels):
+            spans = shared
+            if spans is None:
+                spans = _found_regions(sig.t_s, data[:, c], model=model, want=want,
+                                       min_snr=min_snr, min_points=min_points)
+                if not spans:
+                    no_step.append(f"{name}/{label}")
+                    continue
+            for start, end, region in spans:
+                inside = (sig.t_s >= start) & (sig.t_s < end)
+                if inside.sum() < min_points:
+                    raise InputError(f"the {region!r} interval [{start:g}, {end:g}) s holds "
+                                     f"{int(inside.sum())} samples of stream {stream!r}; at "
+                                     f"least {min_points} are needed", path=path,
+                                     where=trial.where)
+                base = _baseline(sig.t_s, data[:, c], start, end)
+                out.append(StreamCurve(name, label, region, sig.t_s[inside] - start,
+                                       data[inside, c] - base, units[c] or "units", start,
+                                       end, base))
+    if not out:
+        raise InputError(f"no step found in stream {stream!r} ({len(no_step)} curve(s) "
+                         f"searched, threshold {min_snr:g} times the noise); lower "
+                         "`min_snr` or annotate the regions", path=path)
+    return StreamCurves(out, no_step)
 
 
-__all__ = ["REDUCE_MODES", "StreamCurve", "match_channels", "read_stream_curves"]
+__all__ = ["REDUCE_MODES", "STREAM_REGION_MODES", "StreamCurve", "StreamCurves",
+           "match_channels", "read_stream_curves"]

@@ -90,6 +90,8 @@ def fit_records(
             if key in lab:
                 row[key] = _json_value(lab[key])
         row.update({k: _json_value(cols[k][i]) for k in COLUMNS})
+        for key, values in (rf.relaxation or {}).items():
+            row[key] = _json_value(values[i])
         row["status_message"] = rf.message(i)
         out.append(row)
     return out

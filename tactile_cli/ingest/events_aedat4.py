@@ -14,8 +14,15 @@ input file (named after the file stem) holds every stream of the file:
   ``DVXplorer_DXB00010``) unless ``--sensor`` names it; the IMU sensor is ``<camera>_imu``;
 - a stream of a type the decoder does not read (``POSE``, ``BBOX``, ...) is an error, or,
   with ``skip_unknown=True``, left out with a note (:mod:`tactile_cli.ingest.aedat4_filter`);
-- a file needs exactly one event stream and at most one frame stream, since a trial holds
-  one of each.
+- a file holds at most one event stream and at most one frame stream, since a trial holds
+  one of each;
+- a file without an event stream (a DAVIS recording saved with APS frames only, an IMU
+  log) makes a trial without events: its time 0 is the earliest timestamp of its frames,
+  IMU samples and triggers, recorded as the trial attribute ``t_origin_us``; the frames'
+  sensor is an event camera of the frames' size named after the camera (or ``--sensor``);
+  event-sensor options (``--width``/``--height``) are refused for such a file, and a file
+  with neither events, frames nor IMU samples (triggers alone, or only unknown stream
+  types) is refused naming the streams found.
 
 Packets are gathered into chunks of ``IngestOptions.chunk_events`` events before they are
 checked and appended, so memory stays bounded (frames are appended one by one; IMU samples
@@ -41,9 +48,15 @@ import numpy as np
 
 from ..errors import InputError
 from ..progress import Progress
-from ..store.writer import EventAppender, StoreWriter
+from ..store.writer import EventAppender, StoreWriter, TrialWriter, safe_name
 from . import IngestOptions
-from .aedat4_filter import KNOWN_TYPES, copy_without_streams, parse_io_header, unknown_streams
+from .aedat4_filter import (
+    KNOWN_TYPES,
+    copy_without_streams,
+    parse_io_header,
+    stream_types,
+    unknown_streams,
+)
 from .aedat4_streams import FrameCollector, ImuCollector, TriggerCollector
 from .events_table import DEFAULT_SENSOR, event_sensor
 
@@ -94,6 +107,10 @@ def read_streams(path: Path) -> dict[int, StreamInfo]:
 def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
                  progress: Progress) -> list[str]:
     check_layout(path)
+    types = stream_types(path)
+    if types and not any(kind in KNOWN_TYPES for kind in types.values()):
+        raise InputError(f"no stream tactile reads in the file (found: {_found(types)}); "
+                         f"tactile reads {', '.join(KNOWN_TYPES.values())}", path=path)
     unknown = unknown_streams(path)
     if unknown and not options.skip_unknown:
         sid, kind = min(unknown.items())
@@ -110,20 +127,30 @@ def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
             for sid, kind in sorted(unknown.items())]
 
 
+def _found(types: dict[int, str]) -> str:
+    """``stream 0 'POSE', stream 1 'BBOX'`` (or ``no streams``) for messages."""
+    return ", ".join(f"stream {sid} {kind or '(none)'!r}"
+                     for sid, kind in sorted(types.items())) or "no streams"
+
+
+def _stream_kinds(streams: dict[int, StreamInfo]) -> str:
+    return ", ".join(sorted({s.type for s in streams.values()})) or "no streams"
+
+
 def _event_stream(path: Path, streams: dict[int, StreamInfo],
-                  options: IngestOptions) -> tuple[StreamInfo, int, int]:
-    """The file's one event stream and its sensor size (width, height) in px."""
+                  options: IngestOptions) -> tuple[StreamInfo, int, int] | None:
+    """The file's one event stream and its sensor size (width, height) in px; None when
+    the file has no event stream."""
     event_streams = [s for s in streams.values() if s.type == "events"]
-    if not event_streams:
-        found = ", ".join(sorted({s.type for s in streams.values()})) or "no streams"
-        raise InputError(f"no event stream in the file (found: {found})", path=path)
-    if len(event_streams) > 1:
-        raise InputError(f"{len(event_streams)} event streams in one file; a trial holds one "
-                         "event stream: export each camera to its own file", path=path)
     frame_streams = [s for s in streams.values() if s.type == "frame"]
     if len(frame_streams) > 1:
         raise InputError(f"{len(frame_streams)} frame streams in one file; a trial holds one "
                          "image stream: export each camera to its own file", path=path)
+    if not event_streams:
+        return None
+    if len(event_streams) > 1:
+        raise InputError(f"{len(event_streams)} event streams in one file; a trial holds one "
+                         "event stream: export each camera to its own file", path=path)
     stream = event_streams[0]
     if not stream.width_px or not stream.height_px:
         raise InputError(f"event stream {stream.stream_id} does not state its sensor size",
@@ -142,7 +169,11 @@ def _ingest_streams(path: Path, readable: Path, writer: StoreWriter, options: In
     """Ingest ``path`` (as named in messages and sources) by decoding ``readable`` (the
     file itself, or its copy without unknown streams)."""
     streams = read_streams(readable)
-    stream, width, height = _event_stream(path, streams, options)
+    found = _event_stream(path, streams, options)
+    if found is None:
+        _ingest_without_events(path, readable, streams, writer, options, progress)
+        return
+    stream, width, height = found
     name = options.sensor_name or stream.camera or DEFAULT_SENSOR
     described = f"iniVation {stream.camera}" if stream.camera else "AEDAT4 event camera"
     sensor = event_sensor(writer, name, width_px=width, height_px=height, source=path,
@@ -158,34 +189,120 @@ def _ingest_streams(path: Path, readable: Path, writer: StoreWriter, options: In
     imus = {s.stream_id: ImuCollector(path, s.stream_id)
             for s in streams.values() if s.type == "imus"}
     triggers = TriggerCollector()
-    with open(readable, "rb") as raw:
-        sizes = _packet_sizes(raw)
-        progress.advance(next(sizes, 0))  # the file header
-        for packet in _packets(readable, events_read=gather.seen, path=path):
-            progress.advance(next(sizes, 0))
-            sid = packet.get("stream_id")
-            if sid == stream.stream_id and "events" in packet:
-                gather.add(packet["events"])
-            elif sid in frames and "frame" in packet:
-                frames[sid].add(packet["frame"])
-            elif sid in imus and "imus" in packet:
-                imus[sid].add(packet["imus"])
-            elif "triggers" in packet:
-                triggers.add(packet["triggers"])
+    _read_packets(path, readable, progress, gather.seen, {stream.stream_id: gather.add}, frames,
+                  imus, triggers)
     gather.flush()
     # camera clocks count from an arbitrary epoch: the trial starts at its first event
     if events.close(t_origin_us=origin_us) == 0:
         raise InputError(f"event stream {stream.stream_id} holds no events", path=path)
     for collector in frames.values():
         collector.close()
-    imu_name = f"{sensor}_imu"
-    for sid, imu in imus.items():
-        suffix = "" if len(imus) == 1 else f"_{sid}"
-        imu.write(writer, trial, stream=f"imu{suffix}", sensor=f"{imu_name}{suffix}",
-                  camera=stream.camera or sensor, origin_us=origin_us)
+    _write_imus(writer, trial, imus, sensor, stream.camera or sensor, origin_us)
     marks = triggers.annotations(origin_us)
     if marks:
         trial.set_annotations(marks)
+
+
+def _read_packets(path: Path, readable: Path, progress: Progress,
+                  events_read: Callable[[], int], events: dict[int, Callable[[np.ndarray], None]],
+                  frames: dict[int, FrameCollector], imus: dict[int, ImuCollector],
+                  triggers: TriggerCollector) -> None:
+    """One pass over the packets of ``readable``, each handed to its stream's collector."""
+    with open(readable, "rb") as raw:
+        sizes = _packet_sizes(raw)
+        progress.advance(next(sizes, 0))  # the file header
+        for packet in _packets(readable, events_read=events_read, path=path):
+            progress.advance(next(sizes, 0))
+            sid = packet.get("stream_id")
+            if sid in events and "events" in packet:
+                events[sid](packet["events"])
+            elif sid in frames and "frame" in packet:
+                frames[sid].add(packet["frame"])
+            elif sid in imus and "imus" in packet:
+                imus[sid].add(packet["imus"])
+            elif "triggers" in packet:
+                triggers.add(packet["triggers"])
+
+
+def _write_imus(writer: StoreWriter, trial: TrialWriter, imus: dict[int, ImuCollector],
+                sensor: str, camera: str, origin_us: int) -> int:
+    """Write each IMU stream as ``imu`` (``imu_<id>`` when there are several), sensor
+    ``<sensor>_imu``; returns the samples written."""
+    n = 0
+    for sid, imu in imus.items():
+        suffix = "" if len(imus) == 1 else f"_{sid}"
+        n += imu.write(writer, trial, stream=f"imu{suffix}", sensor=f"{sensor}_imu{suffix}",
+                       camera=camera, origin_us=origin_us)
+    return n
+
+
+def _ingest_without_events(path: Path, readable: Path, streams: dict[int, StreamInfo],
+                           writer: StoreWriter, options: IngestOptions,
+                           progress: Progress) -> None:
+    """A trial from a file without an event stream: its frames, IMU samples and triggers,
+    time 0 at the earliest of their timestamps (trial attribute ``t_origin_us``)."""
+    kinds = _stream_kinds(streams)
+    if not any(s.type in ("frame", "imus") for s in streams.values()):
+        raise InputError(f"no event, frame or IMU stream in the file (found: {kinds}); a trial "
+                         "needs one (triggers only mark times in them)", path=path)
+    given = [f"`{k}`" for k in ("width_px", "height_px") if getattr(options, k) is not None]
+    if given:
+        verb = "set" if len(given) > 1 else "sets"
+        raise InputError(f"{' and '.join(given)} {verb} the size of an event sensor, but the file "
+                         f"has no event stream (found: {kinds}); omit "
+                         f"{'them' if len(given) > 1 else 'it'}", path=path)
+    camera = next((s.camera for _, s in sorted(streams.items()) if s.camera), None)
+    sensor = safe_name(options.sensor_name or camera or DEFAULT_SENSOR)
+    origin_us = _earliest_us(path, readable, streams)
+    source = writer.add_source(path)
+    trial = writer.trial(path.stem, sources=[source], t_origin_us=origin_us)
+    frames = {s.stream_id: FrameCollector(trial, _aps_sensor(writer, sensor, camera, s, path),
+                                          path, s.stream_id, origin_us)
+              for s in streams.values() if s.type == "frame"}
+    imus = {s.stream_id: ImuCollector(path, s.stream_id)
+            for s in streams.values() if s.type == "imus"}
+    triggers = TriggerCollector()
+    _read_packets(path, readable, progress, lambda: 0, {}, frames, imus, triggers)
+    n = sum(collector.close() for collector in frames.values())
+    n += _write_imus(writer, trial, imus, sensor, camera or sensor, origin_us)
+    if n == 0:
+        raise InputError(f"the file's streams ({kinds}) hold no frames and no IMU samples",
+                         path=path)
+    marks = triggers.annotations(origin_us)
+    if marks:
+        trial.set_annotations(marks)
+
+
+def _aps_sensor(writer: StoreWriter, name: str, camera: str | None, frames: StreamInfo,
+                path: Path) -> str:
+    """The sensor of APS frames in a file without events: an event camera of their size."""
+    if not frames.width_px or not frames.height_px:
+        raise InputError(f"frame stream {frames.stream_id} does not state its size", path=path)
+    described = f"iniVation {camera}" if camera else "AEDAT4 camera"
+    return event_sensor(writer, name, width_px=int(frames.width_px),
+                        height_px=int(frames.height_px), source=path,
+                        description=f"{described}, APS frames of AEDAT4 frame stream "
+                        f"{frames.stream_id} (the file has no event stream)")
+
+
+def _earliest_us(path: Path, readable: Path, streams: dict[int, StreamInfo]) -> int:
+    """The earliest timestamp of the frames, IMU samples and triggers of a file without
+    events (its trial's time 0), decoded ahead of the main pass as for the first event."""
+    first: int | None = None
+    for packet in _packets(readable, events_read=lambda: 0, path=path):
+        times: list[int] = []
+        if "frame" in packet:
+            times.append(int(packet["frame"]["t"]))
+        for key in ("imus", "triggers"):
+            rows = packet.get(key)
+            if rows is not None and len(rows):
+                times.append(int(np.min(np.asarray(rows["t"], dtype=np.int64))))
+        if times:
+            first = min(times) if first is None else min(first, *times)
+    if first is None:
+        raise InputError(f"the file's streams ({_stream_kinds(streams)}) hold no frames and no "
+                         "IMU samples", path=path)
+    return first
 
 
 def _frame_sensor(writer: StoreWriter, event_sensor_name: str, frames: StreamInfo,

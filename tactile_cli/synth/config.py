@@ -130,8 +130,9 @@ class FitsConfig(_Model):
     """How a ``--fits`` file's converged fits become per-level distributions."""
 
     exclude_second_order: bool = True
-    """Leave out fits whose order verdict is second_order: the FOS does not describe those
-    trials (the scene's saturated big force), so their FOS parameters are not ones to draw."""
+    """Leave out fits whose order verdict is second_order (or relaxation): the FOS does
+    not describe those trials (the scene's saturated big force), so their FOS parameters
+    are not ones to draw."""
     min_fits_per_level: int = Field(default=1, ge=1)
     """Levels with fewer converged fits get their means interpolated between the others."""
 

@@ -203,7 +203,7 @@ def from_fits(
                                  f"({grades[int(level)]!r} and {grade!r})", path=path)
         keep = cols["status"] == "converged"
         if config.fits.exclude_second_order:
-            keep &= cols["order_verdict"] != "second_order"
+            keep &= ~np.isin(cols["order_verdict"], ("second_order", "relaxation"))
         params = [cols["alpha"], cols["tau_s"]]
         if region == "press" and duration_fitted:
             params.append(cols["duration_s"])

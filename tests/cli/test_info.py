@@ -132,9 +132,16 @@ def test_folder_is_one_line_naming_what_to_do(tmp_path, info_file):
 def test_files_that_are_not_hdf5_say_what_to_do(tmp_path, info_file):
     raw = tmp_path / "rec.aedat4"
     raw.write_bytes(b"#!AER-DAT4.0\r\n" + bytes(200))
-    assert _one_line_error(raw).endswith(
-        "not a readable HDF5 file (no HDF5 signature: an AEDAT4 recording); convert it with "
-        f"`tactile ingest {raw} --out FILE.h5` and give that file")
+    # info reads a raw AEDAT4 file itself (tests/ingest/test_aedat4_without_events.py): a
+    # damaged one is the AEDAT4 reader's one line
+    assert _one_line_error(raw) == (f"tactile: error: {raw}: AEDAT4 file header is damaged "
+                                    "(its IOHeader cannot be parsed); re-export or re-copy "
+                                    "the recording")
+    raw_npy = tmp_path / "rec.npy"
+    raw_npy.write_bytes(b"\x93NUMPY" + bytes(200))
+    assert _one_line_error(raw_npy).endswith(
+        "not a readable HDF5 file (no HDF5 signature: a NumPy array); convert it with "
+        f"`tactile ingest {raw_npy} --out FILE.h5` and give that file")
     text = tmp_path / "notes.txt"
     text.write_text("hello\n")
     assert _one_line_error(text).endswith("not a readable HDF5 file (no HDF5 signature: another "

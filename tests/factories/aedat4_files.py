@@ -3,7 +3,8 @@
 ``write_multistream(path, ...)`` writes events, APS frames, IMU samples and triggers (and,
 with ``pose=True``, a pose stream, a type the ``aedat`` decoder does not read) through
 dv-processing's own writer, so the files are real AEDAT4 as DV software writes them (LZ4
-packets, XML header, file data table). It returns the ground truth per stream. Tests skip
+packets, XML header, file data table). It returns the ground truth per stream; ``streams``
+picks the stream types written (a file without events: ``streams=("frames",)``). Tests skip
 when dv-processing is not installed (it is in the ``dev`` extra).
 """
 
@@ -33,10 +34,21 @@ class Aedat4Truth:
     trigger_types: np.ndarray  # (j,) int64 dv TriggerType codes
 
 
+#: The stream types :func:`write_multistream` can write (all of them by default).
+STREAMS = ("events", "frames", "imu", "triggers")
+
+
 def write_multistream(path: Path, *, n_events: int = 2500, n_frames: int = 3, n_imu: int = 40,
-                      n_triggers: int = 2, pose: bool = False, seed: int = 0) -> Aedat4Truth:
-    """Write an AEDAT4 file with every stream type (see the module docstring)."""
+                      n_triggers: int = 2, pose: bool = False, seed: int = 0,
+                      streams: tuple[str, ...] = STREAMS,
+                      camera: str = "DAVIS346_test") -> Aedat4Truth:
+    """Write an AEDAT4 file with the stream types ``streams`` (a subset of :data:`STREAMS`,
+    default all; a pose stream too with ``pose=True``), see the module docstring. The truth
+    of a stream not written is empty (length 0)."""
     dv = pytest.importorskip("dv_processing")
+    unknown = set(streams) - set(STREAMS)
+    if unknown:
+        raise ValueError(f"unknown stream types {sorted(unknown)}; use some of {STREAMS}")
     rng = np.random.default_rng(seed)
     t = T0_US + np.sort(rng.integers(0, 50_000, n_events)).astype(np.int64)
     x = rng.integers(0, W, n_events).astype(np.uint16)
@@ -51,15 +63,30 @@ def write_multistream(path: Path, *, n_events: int = 2500, n_frames: int = 3, n_
     trig_t = T0_US + 2_000 + 7_000 * np.arange(n_triggers, dtype=np.int64)
     trig_types = np.array([1, 2] * n_triggers, dtype=np.int64)[:n_triggers]
 
-    cfg = dv.io.MonoCameraWriter.Config("DAVIS346_test")
-    cfg.addEventStream((W, H))
-    cfg.addFrameStream((W, H))
-    cfg.addImuStream()
-    cfg.addTriggerStream()
+    if "events" not in streams:
+        n_events = 0
+        t, x, y, p = t[:0], x[:0], y[:0], p[:0]
+    if "frames" not in streams:
+        frame_t, exposure, frames = frame_t[:0], exposure[:0], frames[:0]
+        n_frames = 0
+    if "imu" not in streams:
+        imu_t, imu, n_imu = imu_t[:0], imu[:0], 0
+    if "triggers" not in streams:
+        trig_t, trig_types, n_triggers = trig_t[:0], trig_types[:0], 0
+
+    cfg = dv.io.MonoCameraWriter.Config(camera)
+    if "events" in streams:
+        cfg.addEventStream((W, H))
+    if "frames" in streams:
+        cfg.addFrameStream((W, H))
+    if "imu" in streams:
+        cfg.addImuStream()
+    if "triggers" in streams:
+        cfg.addTriggerStream()
     if pose:
         cfg.addPoseStream()
     writer = dv.io.MonoCameraWriter(str(path), cfg)
-    for chunk in np.array_split(np.arange(n_events), 5):  # several event packets
+    for chunk in np.array_split(np.arange(n_events), 5) if n_events else []:  # several packets
         store = dv.EventStore()
         for i in chunk.tolist():
             store.push_back(int(t[i]), int(x[i]), int(y[i]), bool(p[i] > 0))
@@ -83,4 +110,4 @@ def write_multistream(path: Path, *, n_events: int = 2500, n_frames: int = 3, n_
     return Aedat4Truth(events, frame_t, exposure, frames, imu_t, imu, trig_t, trig_types)
 
 
-__all__ = ["Aedat4Truth", "T0_US", "W", "H", "write_multistream"]
+__all__ = ["Aedat4Truth", "STREAMS", "T0_US", "W", "H", "write_multistream"]

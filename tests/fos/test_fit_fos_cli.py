@@ -215,7 +215,7 @@ def test_several_inputs_errors(tmp_path, h5copy):
     (tmp_path / "other").mkdir()
     b = _pulse_csv(tmp_path / "other" / "x.csv", "t,x")
     result = runner.invoke(app, ["fit-fos", str(a), str(b), "--model", "pulse"])
-    assert result.exit_code == 2 and "two inputs are named 'x'" in result.stderr
+    assert result.exit_code == 2 and "two curves are named 'x'" in result.stderr
     result = runner.invoke(app, ["fit-fos", str(h5copy), str(a)])
     assert result.exit_code == 2 and "one HDF5 file per call" in result.stderr
     result = runner.invoke(app, ["fit-fos", str(h5copy), "--units", "N"])
@@ -227,8 +227,11 @@ def test_several_inputs_errors(tmp_path, h5copy):
     (["t,x", "0.0,1", "0.02,2,3"], "line 3: expected 2 values (t, x), got 3"),
     (["t,x", "0.04,1", "0.02,2"], "line 3: t = 0.02 s is not after the previous 0.04 s "
                                   "(times must increase)"),
-    (["0.0,1", "0.02,2"], "line 1: expected a header of two column names such as 't,x', "
-                          "got '0.0,1'"),
+    (["0.0,1", "0.02,2"], "line 1: expected a header of column names such as 't,x' or "
+                          "'t,x1,x2', got '0.0,1'"),
+    (["t,x,x", "0.0,1,2"], "line 1: column 'x' appears twice in the header"),
+    (["t,a,b"] + [f"{0.02 * i},1,{'' if i > 2 else 2}" for i in range(8)],
+     "column 'b': 3 values; a fit needs at least 5"),
 ])
 def test_bad_csv_is_one_line_and_exit_2(tmp_path, rows, message):
     curve = tmp_path / "bad.csv"

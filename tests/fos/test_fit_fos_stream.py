@@ -88,7 +88,11 @@ def test_every_annotation_by_default_and_table(source):
     (["--stream", "taxels", "--reduce", "mean"],
      "--reduce mean averages channels of different units"),
     (["--channels", "fz_*"], "applies with --stream"),
-    (["--stream", "taxels", "--model", "pulse"], "not supported"),
+    (["--stream", "taxels", "--press-duration", "0.5"], "--press-duration applies with "
+                                                         "--model pulse"),
+    (["--stream", "taxels", "--regions", "detect", "--region-label", "press"],
+     "found in the signal are labelled rise or fall"),
+    (["--min-snr", "5"], "--min-snr applies with --stream"),
 ])
 def test_errors(source, args, message):
     path, _ = source

@@ -1,0 +1,182 @@
+"""Steps found in a sampled signal, for fits without annotated regions (``tactile fit-fos FILE
+--stream NAME --regions detect``).
+
+A step here is a fast change of level: a gripper closing on a taxel pad (a rise) or letting
+go (a fall). The detector works on lagged differences ``d_w[i] = x[i + w] - x[i]`` in units
+of the noise: for a first-order step of amplitude A starting at sample ``o``, ``d_w`` peaks
+exactly at ``i = o`` (before it the window only holds part of the rise, after it the rise
+has slowed), at ``A (1 - exp(-w dt / tau))``. So:
+
+1. The noise: ``sigma = 1.4826 MAD(diff(x)) / sqrt(2)`` (robust to the steps themselves), at
+   least a quarter of the signal's smallest nonzero change (quantised ADC counts).
+2. The scale: the smallest lag ``w`` (1, 2, 4, ... samples, at most an eighth of the signal)
+   whose largest ``|d_w|`` reaches 80 % of the largest over every lag. That is about 1.6
+   time constants of the fastest large change: long enough to see it whole, short enough
+   that a slow creep or relaxation after a press changes little within it.
+3. The steps: where ``|d_w| / (sigma sqrt 2)`` exceeds ``min_snr``, one per run of such
+   samples (its peak, the coarse onset), kept when its ``|d_w|`` is at least
+   ``min_fraction`` of the largest one. Onsets of one sign closer than ``2 w`` samples are
+   one step.
+4. The onset: the early rise (10 % to 40 % of the step) extrapolated back to the level
+   before it, corrected for the curvature of a first-order rise, and rounded to the nearest
+   sample (see :func:`_refine`; ``benchmarks/stream_step_detect.py`` measures it). The
+   peak of ``d_w`` alone is noisy there: its window still holds most of the rise when it
+   starts a little early.
+
+Each step's region runs from its onset to the next step's onset (or one sample past the
+end of the signal); it is labelled ``rise`` or ``fall``. Detection is per curve: each channel
+fitted (or their mean) is searched on its own, so a channel that never responds is
+reported, not fitted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+#: Default threshold: a step's lagged difference over the noise of such a difference.
+MIN_SNR = 8.0
+#: Default: a step must change at least this share of the largest step's change.
+MIN_FRACTION = 0.25
+#: A lag reaching this share of the best lag's largest change is long enough.
+_SCALE_SHARE = 0.8
+
+
+@dataclass(frozen=True)
+class DetectedStep:
+    """One step: ``start_s`` its onset, ``end_s`` the next onset (or one sample past the
+    signal's end), both in the signal's time; ``label`` ``"rise"`` or ``"fall"``;
+    ``change`` the lagged difference at the onset (signal units, over ``lag_s``);
+    ``snr`` that change over the noise of a lagged difference."""
+
+    start_s: float
+    end_s: float
+    label: str
+    change: float
+    snr: float
+    lag_s: float
+
+
+def noise_sigma(x: ArrayLike) -> float:
+    """Robust sample noise of ``x`` (n,): 1.4826 MAD of first differences over sqrt 2,
+    floored at a quarter of the smallest nonzero first difference; 0 for a constant signal."""
+    d = np.diff(np.asarray(x, dtype=np.float64))
+    if d.size == 0:
+        return 0.0
+    mad = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / np.sqrt(2.0)
+    nonzero = np.abs(d[d != 0])
+    floor = 0.25 * float(nonzero.min()) if nonzero.size else 0.0
+    return max(mad, floor)
+
+
+def _lagged(x: np.ndarray, w: int) -> np.ndarray:
+    return x[w:] - x[:-w]
+
+
+def _refine(t: np.ndarray, x: np.ndarray, onset: int, w: int) -> int:
+    """The onset sample, from the early rise: a line through the samples of the rise between
+    10 % and 40 % of the way from the level before the step (the ``w`` samples before the coarse
+    onset, less 3) to the level after it (the median of the ``w`` samples from ``w`` past
+    the onset), extrapolated back to the level before. For a first-order rise that line
+    meets it about 0.035 tau before the true onset, which is added back (``0.03 span /
+    slope``, span/slope being about 1.2 tau); the onset sample is the one nearest that time
+    (a start a sample late or early biases tau by about dt/tau, either way). Kept as found
+    when the rise holds fewer than 2 samples in the band (a rise faster than the
+    sampling)."""
+    before = x[max(0, onset - w - 3):max(1, onset - 3)]
+    after = x[min(onset + w, x.size - 1):min(onset + 2 * w, x.size)]
+    if before.size == 0 or after.size == 0:
+        return onset
+    low, high = float(np.median(before)), float(np.median(after))
+    span = high - low
+    if span == 0.0:
+        return onset
+    lo, hi = max(0, onset - w), min(x.size, onset + w + 1)
+    share = (x[lo:hi] - low) / span
+    # the rise itself: back from the first sample past 40 % to the last one under 10 %
+    # (noisy baseline samples above 10 % before the rise are not part of it)
+    past = np.flatnonzero(share > 0.4)
+    if past.size == 0:
+        return onset
+    under = np.flatnonzero(share[:past[0]] < 0.1)
+    first = under[-1] + 1 if under.size else 0
+    band = np.arange(first, past[0]) + lo
+    if band.size < 2 or np.ptp(t[band]) == 0.0:
+        return onset
+    slope, intercept = np.polyfit(t[band], x[band] - low, 1)
+    if not slope * span > 0:
+        return onset
+    # the line meets the level before ~0.035 tau early, and span/slope is ~1.2 tau
+    t0 = -intercept / slope + 0.03 * span / slope
+    dt = float(np.median(np.diff(t)))
+    return int(np.clip(np.searchsorted(t, t0 + 0.5 * dt, side="right") - 1, 0, x.size - 1))
+
+
+def detect_steps(
+    t_s: ArrayLike, x: ArrayLike, *, min_snr: float = MIN_SNR,
+    min_fraction: float = MIN_FRACTION, min_points: int = 4,
+) -> list[DetectedStep]:
+    """The steps of one signal (see the module doc), in time order; empty when none.
+
+    ``t_s`` (n,) increasing seconds, ``x`` (n,) the signal. A step whose region holds fewer
+    than ``min_points`` samples is dropped (it cannot be fitted).
+    """
+    t = np.asarray(t_s, dtype=np.float64)
+    x = np.asarray(x, dtype=np.float64)
+    if t.ndim != 1 or t.shape != x.shape:
+        raise ValueError(f"`t_s` {t.shape} and `x` {x.shape} must be (n,) arrays of one "
+                         "length.")
+    if not (min_snr > 0 and 0 < min_fraction <= 1):
+        raise ValueError(f"`min_snr` (={min_snr}) must be > 0 and `min_fraction` "
+                         f"(={min_fraction}) in (0, 1].")
+    n = x.size
+    sigma = noise_sigma(x)
+    if n < 2 * min_points or sigma == 0.0 and np.ptp(x) == 0.0:
+        return []
+    sigma = sigma or 1e-300
+    lags = [1]
+    while lags[-1] * 2 <= max(1, n // 4):
+        lags.append(lags[-1] * 2)
+    peaks = [float(np.max(np.abs(_lagged(x, w)))) for w in lags]
+    best = max(peaks)
+    w = next(w for w, p in zip(lags, peaks, strict=True) if p >= _SCALE_SHARE * best)
+    d = _lagged(x, w)
+    z = np.abs(d) / (sigma * np.sqrt(2.0))
+    above = z > min_snr
+    if not above.any():
+        return []
+    onsets: list[int] = []
+    i = 0
+    while i < d.size:  # one onset per run of samples above the threshold: its peak
+        if not above[i]:
+            i += 1
+            continue
+        j = i
+        while j < d.size and above[j] and np.sign(d[j]) == np.sign(d[i]):
+            j += 1
+        peak = i + int(np.argmax(np.abs(d[i:j])))
+        if onsets and peak - onsets[-1] < 2 * w and np.sign(d[peak]) == np.sign(d[onsets[-1]]):
+            if abs(d[peak]) > abs(d[onsets[-1]]):
+                onsets[-1] = peak
+        else:
+            onsets.append(peak)
+        i = j
+    largest = max(abs(d[o]) for o in onsets)
+    onsets = [o for o in onsets if abs(d[o]) >= min_fraction * largest]
+    onsets = [_refine(t, x, o, w) for o in onsets]
+    dt_end = float(t[-1] - t[-2]) if n > 1 else 0.0
+    bounds = [float(t[o]) for o in onsets] + [float(t[-1]) + dt_end]
+    lag_s = float(np.median(np.diff(t))) * w
+    steps = []
+    for k, o in enumerate(onsets):
+        start, end = bounds[k], bounds[k + 1]
+        if int(((t >= start) & (t < end)).sum()) < min_points:
+            continue
+        steps.append(DetectedStep(start, end, "rise" if d[o] > 0 else "fall", float(d[o]),
+                                  float(z[o]), lag_s))
+    return steps
+
+
+__all__ = ["MIN_FRACTION", "MIN_SNR", "DetectedStep", "detect_steps", "noise_sigma"]
