@@ -12,8 +12,10 @@ sample, the first sample of the region. ``alpha`` is then in the stream's units.
 Regions come from the trials' annotations (``regions="annotations"``), or are found in the
 signal (``"detect"``: :func:`tactile_cli.fos.step_detect.detect_steps` on each curve, that
 is on each channel, or on their mean with ``reduce="mean"``; regions labelled ``rise`` and
-``fall``), or from annotations where a trial has matching ones and found otherwise
-(``"auto"``). Curves in which no step is found are listed in :attr:`StreamCurves.no_step`,
+``fall``; for the step model each start is then moved to the sample, of the found one
+and its neighbours, that a first-order step fits best:
+:func:`~tactile_cli.fos.step_detect.best_step_start`), or from annotations where a trial
+has matching ones and found otherwise (``"auto"``). Curves in which no step is found are listed in :attr:`StreamCurves.no_step`,
 not fitted. With ``model="pulse"`` and found regions, a rise and the fall after it are one
 region labelled ``pulse`` (the press and its release; the pulse length T is then fitted).
 
@@ -34,7 +36,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..store.trials import TactileFile
-from .step_detect import MIN_SNR, detect_steps
+from .step_detect import MIN_SNR, best_step_start, detect_steps
 
 REDUCE_MODES: tuple[str, ...] = ("none", "mean")
 STREAM_REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
@@ -102,6 +104,8 @@ def _found_regions(t_s: np.ndarray, x: np.ndarray, *, model: str, want: str | No
     ``model="pulse"`` a step and the opposite step after it as one ``pulse``."""
     steps = detect_steps(t_s, x, min_snr=min_snr, min_points=min_points)
     spans = [(s.start_s, s.end_s, s.label) for s in steps]
+    if model == "step":  # the start a first-order step fits best, of the found one +- 1
+        spans = [(best_step_start(t_s, x, a, b), b, label) for a, b, label in spans]
     if model == "pulse":  # pair each step with the opposite one after it, left to right
         pulses, k = [], 0
         while k + 1 < len(steps):
