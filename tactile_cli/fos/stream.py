@@ -15,9 +15,10 @@ is on each channel, or on their mean with ``reduce="mean"``; regions labelled ``
 ``fall``; for the step model each start is then moved to the sample, of the found one
 and its neighbours, that a first-order step fits best:
 :func:`~tactile_cli.fos.step_detect.best_step_start`), or from annotations where a trial
-has matching ones and found otherwise (``"auto"``). Curves in which no step is found are listed in :attr:`StreamCurves.no_step`,
-not fitted. With ``model="pulse"`` and found regions, a rise and the fall after it are one
-region labelled ``pulse`` (the press and its release; the pulse length T is then fitted).
+has matching ones and found otherwise (``"auto"``). Curves in which no step is found are
+listed in :attr:`StreamCurves.no_step`, not fitted. With ``model="pulse"`` and found
+regions, a rise and the fall after it are one region labelled ``pulse`` (the press and its
+release; the pulse length T is then fitted).
 
 Channels are chosen by a glob (``fnmatch``, case-sensitive, several globs separated by
 commas) and fitted one by one (``reduce="none"``) or as their mean (``reduce="mean"``).
