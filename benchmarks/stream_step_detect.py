@@ -41,7 +41,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tactile_cli.fos.protocol import fit_curves  # noqa: E402
-from tactile_cli.fos.step_detect import best_step_start, detect_steps  # noqa: E402
+from tactile_cli.fos.step_detect import (  # noqa: E402
+    best_step_start,
+    detect_steps,
+    level_before,
+)
 
 RATE_HZ = 200.0
 T = np.arange(0.0, 3.0, 1 / RATE_HZ)
@@ -54,8 +58,7 @@ def _rise(onset: float, alpha: float, tau: float) -> np.ndarray:
 def _curve_from(start_s: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The region from ``start_s`` to the end, baseline subtracted as fit-fos --stream does."""
     inside = T >= start_s
-    before = (T < start_s) & (T >= start_s - (T[-1] + 1 / RATE_HZ - start_s))
-    base = x[before].mean() if before.any() else x[inside][0]
+    base = level_before(T, x, start_s, T[-1] + 1 / RATE_HZ)
     return T[inside] - start_s, x[inside] - base
 
 

@@ -179,7 +179,7 @@ def detect_steps(
     return steps
 
 
-def _baseline(t: np.ndarray, x: np.ndarray, start: float, end: float) -> float:
+def level_before(t: np.ndarray, x: np.ndarray, start: float, end: float) -> float:
     """The level before a region ``[start, end)``: the mean of the samples in the window of
     the same length just before it, else the region's first sample (as ``fit-fos
     --stream`` subtracts it)."""
@@ -212,7 +212,7 @@ def best_step_start(t_s: ArrayLike, x: ArrayLike, start_s: float, end_s: float, 
         if inside.sum() < 4:
             continue
         tt = t[inside] - t[j]
-        y = x[inside] - _baseline(t, x, float(t[j]), end_s)
+        y = x[inside] - level_before(t, x, float(t[j]), end_s)
         # the rise only: up to three times the time to 90 % of the largest excursion, so
         # that a later creep or relaxation does not choose the start
         t90 = tt[int(np.argmax(np.abs(y) >= 0.9 * np.max(np.abs(y))))]
@@ -227,4 +227,4 @@ def best_step_start(t_s: ArrayLike, x: ArrayLike, start_s: float, end_s: float, 
 
 
 __all__ = ["MIN_FRACTION", "MIN_SNR", "DetectedStep", "best_step_start", "detect_steps",
-           "noise_sigma"]
+           "level_before", "noise_sigma"]

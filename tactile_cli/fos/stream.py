@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..store.trials import TactileFile
-from .step_detect import MIN_SNR, best_step_start, detect_steps
+from .step_detect import MIN_SNR, best_step_start, detect_steps, level_before
 
 REDUCE_MODES: tuple[str, ...] = ("none", "mean")
 STREAM_REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
@@ -79,14 +79,6 @@ def match_channels(names: Sequence[str], pattern: str | None) -> list[str]:
         return list(names)
     globs = [g.strip() for g in pattern.split(",") if g.strip()]
     return [n for n in names if any(fnmatch.fnmatchcase(n, g) for g in globs)]
-
-
-def _baseline(t: np.ndarray, x: np.ndarray, start: float, end: float) -> float:
-    before = (t < start) & (t >= start - (end - start))
-    if before.any():
-        return float(np.mean(x[before]))
-    inside = (t >= start) & (t < end)
-    return float(x[inside][0])
 
 
 def _numbered(spans: list[tuple[float, float, str]]) -> list[tuple[float, float, str]]:
@@ -210,7 +202,7 @@ def read_stream_curves(
                                      f"{int(inside.sum())} samples of stream {stream!r}; at "
                                      f"least {min_points} are needed", path=path,
                                      where=trial.where)
-                base = _baseline(sig.t_s, data[:, c], start, end)
+                base = level_before(sig.t_s, data[:, c], start, end)
                 out.append(StreamCurve(name, label, region, sig.t_s[inside] - start,
                                        data[inside, c] - base, units[c] or "units", start,
                                        end, base))
