@@ -5,6 +5,7 @@
 #   make ingest RAW=dir OUT=dir [INGEST_FLAGS="--width 640 --height 480"]
 #                             one HDF5 file per raw recording; parallel under make -j;
 #                             outputs that are up to date are skipped
+#   make sweep-vibro          paper 001's grid (3 models x 6 windows x 8 channel sets) on Dask
 #   make bench                run the benchmarks in benchmarks/ (figures: benchmarks/RESULTS.md)
 #   make fuzz                 every command on the seeded corpus of damaged inputs (issue 20):
 #                             counts per outcome class (`make test` runs a fast subset)
@@ -15,7 +16,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: bench-long demo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
+.PHONY: sweep-vibro bench-long demo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -168,6 +169,27 @@ bench-long: $(STAMP)
 	$(BIN)/python benchmarks/grade_stability.py
 	$(BIN)/python benchmarks/xela_loto.py
 	$(BIN)/python benchmarks/spatial_classifier.py
+
+# Paper 001's full grid (issue 14, items 4 and 9): 3 models x 6 windows x 8 channel sets
+# (configs/sweep_vibro.yaml; 128 runs, 16 n/a) on Dask, each trained on a simulated scene
+# (seed 0) and evaluated on another (seed 1), into one table, Fig. 8 and the speed-accuracy
+# chart in $(SWEEP_OUT). Estimate on 2 shared cores with 2 workers: about an hour (8 L3R3
+# runs of 2 epochs on 2 s recordings took 140 s; the grid trains 128 runs of 5 epochs, the
+# one-axis sets faster). A stopped sweep restarted skips its finished runs;
+# SWEEP_FLAGS="--scheduler tcp://host:8786" sends the runs to an existing Dask cluster.
+SWEEP_OUT ?= benchmarks/sweep_vibro
+SWEEP_DATA := $(SWEEP_OUT)/data
+SWEEP_FLAGS ?=
+sweep-vibro: $(STAMP)
+	mkdir -p $(SWEEP_DATA)
+	for s in 0 1; do \
+	  test -f $(SWEEP_DATA)/prepared$$s.h5 && continue; \
+	  $(TACTILE) simulate vibro-slip --out $(SWEEP_DATA)/scene$$s --duration 2 --seed $$s --overwrite --no-progress || exit 1; \
+	  $(TACTILE) ingest $(SWEEP_DATA)/scene$$s --format accel-tree --label origin=simulated --label "dataset=vibro-slip seed $$s" --out $(SWEEP_DATA)/scene$$s.h5 --overwrite --no-progress || exit 1; \
+	  $(TACTILE) accel-prepare $(SWEEP_DATA)/scene$$s.h5 --out $(SWEEP_DATA)/prepared$$s.h5 --segment-s 0.5 --no-progress || exit 1; \
+	  rm -rf $(SWEEP_DATA)/scene$$s $(SWEEP_DATA)/scene$$s.h5; \
+	done
+	$(TACTILE) sweep configs/sweep_vibro.yaml --data $(SWEEP_DATA)/prepared0.h5 --eval-data $(SWEEP_DATA)/prepared1.h5 --out $(SWEEP_OUT)/result $(SWEEP_FLAGS)
 
 # ---- batch ingest: one output per input, atomic writes, up-to-date outputs skipped ----
 RAW ?= raw

@@ -1,6 +1,6 @@
 """The import rules of ARCHITECTURE.md, read from the source (imports inside functions
 included): who may import whom, no cycle between packages, and which package alone may
-import h5py, typer, torch and JAX."""
+import h5py, typer, torch, JAX and dask."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ FOUNDATIONS = {"errors", "progress", "interrupt", "config_file", "vocabulary", "
 METHODS = {"learn", "fos", "grade", "spectral"}
 #: Third-party packages that one package alone may import, and that package.
 OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
-          "jax": {"fos"}, "optimistix": {"fos"}}
+          "jax": {"fos"}, "optimistix": {"fos"}, "dask": {"batch"}, "distributed": {"batch"}}
 
 
 def _unit(path: Path) -> str:
@@ -87,11 +87,18 @@ def test_foundations_import_only_foundations():
         assert units.get(unit, set()) <= FOUNDATIONS, (unit, units[unit])
 
 
+def test_batch_imports_only_foundations():
+    """batch/ (the Dask execution layer) knows nothing of tactile data."""
+    units, _ = _graph()
+    assert units["batch"] <= FOUNDATIONS, units["batch"] - FOUNDATIONS
+
+
 def test_methods_import_no_sensor_chain():
     """learn/, fos/, grade/ take any stream: they may use store/, events/ (the one place
-    raw events become a count stream) and each other, never a chain's package."""
+    raw events become a count stream), batch/ (runs on Dask) and each other, never a
+    chain's package."""
     units, _ = _graph()
-    allowed = FOUNDATIONS | METHODS | {"store", "events"}
+    allowed = FOUNDATIONS | METHODS | {"store", "events", "batch"}
     for unit in METHODS:
         assert units[unit] <= allowed, (unit, units[unit] - allowed)
 
@@ -143,6 +150,7 @@ def test_the_rules_see_real_imports():
     assert "store" in units["learn"] and "cli" in units["__main__"]
     assert third["h5py"] == {"store"} or "store" in third["h5py"]
     assert "torch" in third and "learn" in third["torch"]
+    assert "batch" in units["learn"] and third["distributed"] == {"batch"}
 
 
 def test_package_exposes_each_chain_verb_without_loading_torch_or_jax():

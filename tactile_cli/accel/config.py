@@ -96,6 +96,16 @@ class VibroSceneConfig(_Model):
     motor_hum_g: float = Field(default=0.02, ge=0, le=5)
     """Scene: RMS of the bar's mode excited by the running motor at 0.48 rps (scales with
     speed; 30 % of it while the motor holds at a dead point)."""
+    grip_hum_g: float = Field(default=0.015, ge=0, le=5)
+    """Scene: RMS of the grasped bar's mode excited all the time by the gripper holding it
+    (its servo and frame), whether or not anything moves. Paper 001 (sec. 6.2) found the
+    object at rest (91 %) and explains it by the set-up: installing an object and its grip
+    force change the gripper's vibration. 0 leaves the cue out. 0.015 g: a linear probe on
+    Welch spectra of still windows, trained on scene seed 0, names the object in 91 % of
+    the still windows of seed 2 (paper: 91 %); 0.01 g gives 81 %, 0 g 59 % (chance 33 %)."""
+    grip_mode_spread: float = Field(default=0.03, ge=0, le=0.5)
+    """Scene: relative standard deviation of the bar's clamped mode frequency between
+    set-ups (recordings): the grip force and clamping point shift it."""
     pad_resonance_hz: float = Field(default=350.0, gt=0, le=3900)
     """Scene: resonance of the fingertip pad (TPU padding, silicone insert)."""
     pad_q: float = Field(default=1.5, gt=0.1, le=100)

@@ -5,7 +5,12 @@ Delay 1: a trained run slides its window over the test recordings with a stride 
 sample labelled ``slip`` after one that is not), the first window ending at or after the
 onset that the run calls ``slip`` gives the number of slip samples it needed; their mean,
 at the run's sample rate, is ``delay_samples_ms``. Onsets that are never detected before
-the slip ends (or the recording ends) are counted as ``missed`` and left out of the mean.
+the slip ends (or the recording ends) are counted as ``missed`` and left out of the mean;
+``missed_long`` counts those among slips lasting at least one window (a slip shorter than
+the window, a brief drag or encoder flicker around the 5 cm/s rule, fills little of any
+window that ends inside it), and ``delay_long_ms`` is the mean delay 1 over those slips
+alone: a slip that resumes after a flicker is often called at once, which pulls the mean
+over every onset down.
 
 Delay 2: the measured inference time of one window at batch 1 on this machine's CPU
 (median, :func:`tactile_cli.learn.measure_latency`), ``inference_ms``.
@@ -46,36 +51,52 @@ class DelayResult:
     sample_rate_hz: float
     threads: int
     per_onset_samples: list[int] = field(default_factory=list)
+    n_onsets_long: int = 0
+    """Onsets whose slip lasts at least one window (``window`` samples)."""
+    n_detected_long: int = 0
+    delay_long_ms: float | None = None
+    """Mean delay 1 over the detected onsets of those slips (None: none)."""
 
     def as_dict(self) -> dict[str, Any]:
         out = {k: getattr(self, k) for k in (
             "delay_samples_ms", "inference_ms", "total_ms", "motion_accuracy", "delay_samples",
             "n_onsets", "n_detected", "n_trials", "n_windows", "stride", "window",
-            "sample_rate_hz", "threads", "run")}
+            "sample_rate_hz", "threads", "run", "n_onsets_long", "n_detected_long",
+            "delay_long_ms")}
         out["missed"] = self.n_onsets - self.n_detected
+        out["missed_long"] = self.n_onsets_long - self.n_detected_long
         return out
 
 
-def onset_delays(labels: np.ndarray, ends: np.ndarray, predicted: np.ndarray, slip: int
-                 ) -> tuple[list[int], int]:
-    """Samples each slip onset needed before the first ``slip`` call.
+def onset_outcomes(labels: np.ndarray, ends: np.ndarray, predicted: np.ndarray, slip: int
+                   ) -> list[tuple[int, int | None]]:
+    """``(slip run length, delay)`` in samples for every slip onset of one trial.
 
     labels: (n,) per-sample class codes of one trial; ends: (k,) increasing last-sample
-    index of each window; predicted: (k,) predicted class of each window. Returns
-    (delays in samples of the detected onsets, number of onsets). An onset is a sample
-    labelled ``slip`` whose predecessor is not; it is detected by the first window that
-    ends inside the same slip run and is called ``slip``.
+    index of each window; predicted: (k,) predicted class of each window. An onset is a
+    sample labelled ``slip`` whose predecessor is not; its run lasts until the next sample
+    that is not ``slip`` (or the trial's end). It is detected by the first window that
+    ends inside the same run and is called ``slip``; the delay is that window's last sample
+    minus the onset, plus one, or None when no such window exists (missed).
     """
     is_slip = labels == slip
     onsets = np.flatnonzero(is_slip[1:] & ~is_slip[:-1]) + 1
-    delays = []
+    out: list[tuple[int, int | None]] = []
     for onset in onsets:
         after = np.flatnonzero(~is_slip[onset:])
         stop = onset + (after[0] if after.size else len(labels) - onset)
         sel = (ends >= onset) & (ends < stop) & (predicted == slip)
-        if sel.any():
-            delays.append(int(ends[np.argmax(sel)] - onset + 1))
-    return delays, int(len(onsets))
+        out.append((int(stop - onset),
+                    int(ends[np.argmax(sel)] - onset + 1) if sel.any() else None))
+    return out
+
+
+def onset_delays(labels: np.ndarray, ends: np.ndarray, predicted: np.ndarray, slip: int
+                 ) -> tuple[list[int], int]:
+    """(delays in samples of the detected onsets, number of onsets): see
+    :func:`onset_outcomes`."""
+    outcomes = onset_outcomes(labels, ends, predicted, slip)
+    return [d for _, d in outcomes if d is not None], len(outcomes)
 
 
 def detection_delay(run_dir: str | Path, data_paths: Sequence[str | Path], *, stride: int = 5,
@@ -119,13 +140,14 @@ def detection_delay(run_dir: str | Path, data_paths: Sequence[str | Path], *, st
     pred = predict(model, ws)[motion].argmax(axis=1)
     truth = ws.targets[motion]
     slip = head.classes.index(slip_class)
-    delays: list[int] = []
-    n_onsets = 0
+    outcomes: list[tuple[int, int | None]] = []
     for i, t in enumerate(trials):
         sel = ws.trial_index == i
-        d, k = onset_delays(t.sample_labels[motion], ws.end_index[sel], pred[sel], slip)
-        delays += d
-        n_onsets += k
+        outcomes += onset_outcomes(t.sample_labels[motion], ws.end_index[sel], pred[sel], slip)
+    delays = [d for _, d in outcomes if d is not None]
+    n_onsets = len(outcomes)
+    long_runs = [d for n, d in outcomes if n >= data.window]
+    long_hits = [d for d in long_runs if d is not None]
     if n_onsets == 0:
         raise InputError("the data hold no slip onset (no sample labelled "
                          f"{slip_class!r} after one that is not)")
@@ -141,4 +163,8 @@ def detection_delay(run_dir: str | Path, data_paths: Sequence[str | Path], *, st
         total_ms=round(delay_ms + lat.batch1_ms_median, 4),
         motion_accuracy=round(float((pred == truth).mean()), 6), n_onsets=n_onsets,
         n_detected=len(delays), n_trials=len(trials), n_windows=len(ws), stride=stride,
-        window=data.window, sample_rate_hz=rate, threads=threads, per_onset_samples=delays)
+        window=data.window, sample_rate_hz=rate, threads=threads, per_onset_samples=delays,
+        n_onsets_long=len(long_runs),
+        delay_long_ms=round(float(np.mean(long_hits)) * period_s * 1e3, 4) if long_hits
+        else None,
+        n_detected_long=sum(d is not None for d in long_runs))

@@ -16,12 +16,15 @@ slider with the object's stops (sliding, then slippage when the slider pushes th
 then a motor pause: no motion; the paper's Fig. 2 cycle), short drags of slippery objects
 during sliding, encoder quantisation of both velocities, surface-following vibration that
 grows with roughness and speed and rises in pitch with speed, the ring-down of the bar when
-the slider hits a stop, motor hum through the bar, the fingertip pad's resonance, the
+the slider hits a stop, motor hum through the bar, the grasped bar's mode excited by the
+gripper holding it (``grip_hum_g``, always on, its frequency shifted per set-up by
+``grip_mode_spread``: the cue that lets paper 001 name the object at rest), the fingertip
+pad's resonance, the
 orientation's split of vibration over x/y/z, gravity offset, sensor noise, the 1.5 kHz
 first-order low-pass, 16-bit quantisation and clipping at +-5 g.
 
-Left out: the gripper force and its changes between set-ups (the paper's explanation of
-texture cues at rest), stick-slip limit cycles of the pads, wear and temperature, the
+Left out: the gripper force itself (only its effect on the bar's mode is modelled),
+stick-slip limit cycles of the pads, wear and temperature, the
 ``dv/dt h'`` term of surface following, aliasing (profiles stop at 100 um wavelengths, so
 nothing exceeds 4 kHz), cross-axis sensitivity of the accelerometers, the ADC's timing
 jitter and the acquisition's USB framing. Every recording of one texture in one scene
@@ -99,9 +102,11 @@ class Recording:
 
 
 def simulate_recording(cfg: VibroSceneConfig, texture_name: str, orientation_deg: float,
-                       motor_rps: float, surfaces: Surfaces, rng: np.random.Generator
-                       ) -> Recording:
-    """Simulate one recording (see the module docstring)."""
+                       motor_rps: float, surfaces: Surfaces, rng: np.random.Generator,
+                       grip_rng: np.random.Generator | None = None) -> Recording:
+    """Simulate one recording (see the module docstring). ``grip_rng`` draws the set-up's
+    grip vibration (default: ``rng``); a separate stream keeps the rest of a recording
+    unchanged when ``cfg.grip_hum_g`` changes."""
     texture = cfg.textures[texture_name]
     motion = simulate_motion(cfg, texture, motor_rps, rng)
     rate = cfg.rate_hz
@@ -127,6 +132,13 @@ def simulate_recording(cfg: VibroSceneConfig, texture_name: str, orientation_deg
     moving = up((np.abs(motion.v_slider_m_s) > 1e-6).astype(float)) > 0.5
     level = cfg.motor_hum_g * motor_rps / _HUM_REFERENCE_RPS * np.where(moving, 1.0, 0.3)
     bar = hum(n, rate, texture.mode_hz, texture.mode_q, level, rng) + ring
+    grip_mode_hz = None
+    if cfg.grip_hum_g > 0:
+        grip_rng = rng if grip_rng is None else grip_rng
+        grip_mode_hz = texture.mode_hz * float(
+            np.exp(cfg.grip_mode_spread * grip_rng.standard_normal()))
+        bar = bar + hum(n, rate, grip_mode_hz, texture.mode_q,
+                        np.full(n, cfg.grip_hum_g), grip_rng)
     alpha = np.deg2rad(orientation_deg)
     accel = np.empty((n, 6))
     for side, (tangential, normal) in enumerate(fingers):
@@ -145,6 +157,7 @@ def simulate_recording(cfg: VibroSceneConfig, texture_name: str, orientation_deg
         "texture": texture_name, "orientation_deg": orientation_deg, "motor_rps": motor_rps,
         "roughness_nm": texture.roughness_nm, "wavelength_mm": texture.wavelength_mm,
         "n_samples": n, "n_impacts": int(len(motion.impacts)),
+        "grip_mode_hz": None if grip_mode_hz is None else round(grip_mode_hz, 3),
         "peak_speed_m_s": round(float(np.abs(motion.v_slider_m_s).max()), 6),
         "clipped_fraction": round(float((np.abs(values) >= 1).mean()), 6),
         "vibration_rms_g": [round(float(v), 6) for v in (accel.std(axis=0))],
@@ -212,7 +225,8 @@ def simulate_vibro_slip(cfg: VibroSceneConfig, out_dir: str | Path, *, seed: int
             for ti, tex, oi, ori, si, rps in cells:
                 raise_if_requested()
                 rng = np.random.default_rng([seed, 1, ti, oi, si])
-                rec = simulate_recording(cfg, tex, ori, rps, surfaces[tex], rng)
+                rec = simulate_recording(cfg, tex, ori, rps, surfaces[tex], rng,
+                                         np.random.default_rng([seed, 2, ti, oi, si]))
                 folder = tmp.joinpath(*rec.folder)
                 folder.mkdir(parents=True, exist_ok=True)
                 write_csv(folder / "data.csv", rec.accel, rec.velocity)

@@ -34,6 +34,7 @@ from . import report as _report
 from . import samples as _samples
 from . import simulate as _simulate
 from . import slip_rate as _slip_rate
+from . import sweep as _sweep
 from . import synth as _synth
 from . import train as _train
 from . import validate as _validate
@@ -174,6 +175,8 @@ app.command("detect-delay", context_settings=_MANY_FILES,
             help="Samples and inference time a run needs to detect slippage (paper 001).")(
     _detect_delay.detect_delay_command
 )
+app.command("sweep", help="Train and evaluate a grid of model x window x channel set on "
+            "Dask: one table, Fig. 8 and the speed-accuracy chart.")(_sweep.sweep_command)
 app.command("report", context_settings=_MANY_FILES,
             help="One self-contained HTML page of runs, comparison and data files.")(
     _report.report_command

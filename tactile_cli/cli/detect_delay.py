@@ -34,7 +34,9 @@ def detect_delay_command(
     """Detection delay of slippage (paper 001, sec. 6.5): slip samples the run needs before
     it says slip (delay 1, ms) plus its inference time at batch 1 on this CPU (delay 2).
 
-    JSON keys: delay_samples_ms, inference_ms, total_ms, motion_accuracy, n_onsets, missed.
+    JSON keys: delay_samples_ms, inference_ms, total_ms, motion_accuracy, n_onsets, missed,
+    missed_long (missed among slips lasting at least one window), delay_long_ms (delay 1 over
+    those slips).
     """
 
     def body() -> None:
@@ -52,8 +54,13 @@ def detect_delay_command(
             return
         typer.echo(f"slip detected after {out['delay_samples']:.1f} samples = "
                    f"{out['delay_samples_ms']:.2f} ms (+ inference {out['inference_ms']:.2f} ms)"
-                   f" = {out['total_ms']:.2f} ms; {out['n_detected']}/{out['n_onsets']} onsets, "
-                   f"motion accuracy {100 * out['motion_accuracy']:.1f} % over "
+                   f" = {out['total_ms']:.2f} ms (mean over the detected onsets); "
+                   f"{out['n_detected']}/{out['n_onsets']} onsets detected, "
+                   f"{out['n_detected_long']}/{out['n_onsets_long']} of the slips lasting at "
+                   f"least one window ({out['window']} samples)"
+                   + (f", after {out['delay_long_ms']:.2f} ms on those"
+                      if out["delay_long_ms"] is not None else "")
+                   + f"; motion accuracy {100 * out['motion_accuracy']:.1f} % over "
                    f"{out['n_windows']} windows (stride {stride})")
 
     run_guarded(body, flags=FLAGS)

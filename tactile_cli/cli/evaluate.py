@@ -182,6 +182,10 @@ def print_metrics(console: Console, result: EvalResult) -> None:
             captions.append("absent classes are left out of the macro F1")
         table.caption = "; ".join(captions) or None
         console.print(table)
+        for other, groups in (m.accuracy_by or {}).items():
+            parts = [f"{name} {_pct(g['accuracy'])} ({g['n']:,})" for name, g in groups.items()
+                     if g["n"]]
+            console.print(f"{m.head} accuracy by true {other}: " + ", ".join(parts))
         if m.per_trial:
             v = m.per_trial
             console.print(f"{m.head} per trial ({v['n_trials']} trials): majority vote "

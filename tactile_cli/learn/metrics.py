@@ -66,6 +66,10 @@ class ClassificationMetrics:
     n_trials: int | None = None
     per_trial: dict[str, Any] | None = None
     """Trial-level targets: :class:`.trial_metrics.TrialVotes` as a dict."""
+    accuracy_by: dict[str, dict[str, dict[str, Any]]] | None = None
+    """Multi-task runs: this head's accuracy within each true class of every other
+    classification head, ``{other head: {class: {"accuracy", "n"}}}`` (e.g. texture at
+    rest, while sliding and while slipping; paper 001, sec. 6.2). None with one head."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -253,7 +257,36 @@ def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: 
             true = ws.targets[head.name].astype(np.float64) * s_ + m_
             decoded[head.name] = pred
             metrics.append(regression_metrics(true, pred, head=head.name))
+    _accuracy_by_other_heads(heads, metrics, decoded, ws)
     return metrics, decoded
+
+
+def accuracy_within(y_true: np.ndarray, y_pred: np.ndarray, group: np.ndarray,
+                    group_classes: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """Accuracy of ``y_pred`` (n,) against ``y_true`` (n,) within each ``group`` (n,)
+    class index: ``{class: {"accuracy": float | None, "n": int}}`` (None: no window;
+    negative group indices, unlabelled windows, are left out)."""
+    out: dict[str, dict[str, Any]] = {}
+    hit = np.asarray(y_true) == np.asarray(y_pred)
+    for i, name in enumerate(group_classes):
+        mask = np.asarray(group) == i
+        n = int(mask.sum())
+        out[str(name)] = {"accuracy": float(hit[mask].mean()) if n else None, "n": n}
+    return out
+
+
+def _accuracy_by_other_heads(heads: Sequence[HeadSpec],
+                             metrics: Sequence[ClassificationMetrics | RegressionMetrics],
+                             decoded: dict[str, np.ndarray], ws: WindowSet) -> None:
+    classifiers = [(h, m) for h, m in zip(heads, metrics, strict=True)
+                   if isinstance(m, ClassificationMetrics)]
+    if len(classifiers) < 2:
+        return
+    for head, m in classifiers:
+        m.accuracy_by = {
+            other.name: accuracy_within(ws.targets[head.name], decoded[head.name],
+                                        ws.targets[other.name], other.classes)
+            for other, _ in classifiers if other.name != head.name}
 
 
 def check_eval_folder(run_path: Path, name: str, overwrite: bool) -> Path:

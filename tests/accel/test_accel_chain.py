@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.accel import CHANNEL_CONFIGS, VibroSceneConfig, simulate_vibro_slip
-from tactile_cli.accel.delay import onset_delays
+from tactile_cli.accel.delay import onset_delays, onset_outcomes
 from tactile_cli.accel.prepare import prepare_file, segment_bounds
 from tactile_cli.accel.simulate import draw_surfaces, simulate_recording
 from tactile_cli.cli import app
@@ -24,6 +24,7 @@ from tactile_cli.spectral import (
     spectral_centroid,
     spectrogram,
     stft_lengths,
+    welch_psd,
 )
 from tactile_cli.store import TactileFile
 
@@ -79,7 +80,7 @@ def test_same_seed_same_bytes_other_seed_other_bytes(scene: Path, tmp_path: Path
 
 def test_roughness_shows_in_band_power():
     """Slip vibration power (200-1500 Hz) orders the textures by roughness."""
-    cfg = _small(duration_s=4.0, motor_hum_g=0.0, impact_g_per_m_s=0.0)
+    cfg = _small(duration_s=4.0, motor_hum_g=0.0, grip_hum_g=0.0, impact_g_per_m_s=0.0)
     power = {t: band_power(_slip_samples(_recording(cfg, t, 0.32)), RATE, [(200, 1500)])
              [0, 0] for t in cfg.textures}
     assert power["wood"] > 10 * power["plastic"] > 0
@@ -88,7 +89,8 @@ def test_roughness_shows_in_band_power():
 
 def test_speed_raises_the_spectral_centroid():
     """Temporal frequency = speed / wavelength: faster slip, higher centroid."""
-    cfg = _small(duration_s=4.0, motor_hum_g=0.0, impact_g_per_m_s=0.0, noise_g=0.0)
+    cfg = _small(duration_s=4.0, motor_hum_g=0.0, grip_hum_g=0.0, impact_g_per_m_s=0.0,
+                 noise_g=0.0)
     slow = spectral_centroid(_slip_samples(_recording(cfg, "wood", 0.16)), RATE, f_min_hz=20)
     fast = spectral_centroid(_slip_samples(_recording(cfg, "wood", 0.48)), RATE, f_min_hz=20)
     assert fast[0] > 1.3 * slow[0]
@@ -97,12 +99,35 @@ def test_speed_raises_the_spectral_centroid():
 def test_the_1500_hz_lowpass_is_visible():
     """Sensor noise alone: its spectrum is flat below the cut-off and falls above it as a
     first-order low-pass does (-3 dB at 1.5 kHz, about 1/(1 + (f/fc)^2) in power)."""
-    cfg = _small(slip_gain=0, slide_gain=0, motor_hum_g=0, impact_g_per_m_s=0, noise_g=0.5,
+    cfg = _small(slip_gain=0, slide_gain=0, motor_hum_g=0, grip_hum_g=0, impact_g_per_m_s=0,
+                 noise_g=0.5,
                  duration_s=4.0)
     rec = _recording(cfg, "wood", 0.16)
     low, at_fc, high = band_power(rec.accel, RATE, [(100, 300), (1400, 1600), (3000, 3200)])
     assert at_fc[0] / low[0] == pytest.approx(0.5, rel=0.25)
     assert high[0] / low[0] < 0.3
+
+
+def test_the_grip_rings_the_bar_mode_at_rest():
+    """At rest the grip vibration is a peak at the bar's mode (shifted per set-up by at
+    most a few spreads); without it the rest is sensor noise, flat below the cut-off."""
+    def still_peak_hz(grip: float, texture: str) -> tuple[float, float]:
+        cfg = _small(duration_s=4.0, grip_hum_g=grip, motor_hum_g=0.0, impact_g_per_m_s=0.0)
+        surfaces = draw_surfaces(cfg.textures[texture], np.random.default_rng([0, 0]))
+        rec = simulate_recording(cfg, texture, 0.0, 0.32, surfaces, np.random.default_rng(0),
+                                 np.random.default_rng(1))
+        still = rec.accel[np.abs(rec.velocity).max(axis=1) < 0.05, 0].astype(float)
+        f, spec = welch_psd(still[:, None], RATE, nperseg=512)
+        spec = spec[:, 0]
+        band = (f > 200) & (f < 1400)
+        return float(f[band][spec[band].argmax()]), float(spec[band].max() / np.median(
+            spec[band]))
+    for texture in ("plastic", "wood"):
+        mode = VibroSceneConfig().textures[texture].mode_hz
+        peak_hz, prominence = still_peak_hz(0.02, texture)
+        assert abs(np.log(peak_hz / mode)) < 4 * 0.03 + 0.05
+        assert prominence > 2
+    assert still_peak_hz(0.0, "plastic")[1] < still_peak_hz(0.02, "plastic")[1] / 2
 
 
 def test_prepare_segments_and_speed(scene: Path, tmp_path: Path):
@@ -159,6 +184,8 @@ def test_onset_delays():
     pred[ends >= 30] = 1
     delays, n = onset_delays(labels, ends, pred, 2)
     assert n == 2 and delays == [11]  # onset 10, first slip call at 20; the second missed
+    # run lengths: 20 samples (detected after 11) and 5 samples (the trial's end; missed)
+    assert onset_outcomes(labels, ends, pred, 2) == [(20, 11), (5, None)]
 
 
 def test_cli_simulate_help_json_and_errors(tmp_path: Path):
@@ -201,6 +228,8 @@ def test_detect_delay_end_to_end(scene: Path, tmp_path: Path):
     out = json.loads(res.output)
     assert {"delay_samples_ms", "inference_ms", "total_ms", "motion_accuracy"} <= set(out)
     assert out["n_onsets"] > 0 and 0 <= out["motion_accuracy"] <= 1
+    assert 0 <= out["missed_long"] <= out["missed"] <= out["n_onsets"]
+    assert out["n_onsets_long"] <= out["n_onsets"]
     if out["n_detected"]:
         assert out["total_ms"] == pytest.approx(out["delay_samples_ms"] + out["inference_ms"],
                                                 abs=1e-3)

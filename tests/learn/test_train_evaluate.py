@@ -238,6 +238,14 @@ def test_sampled_signal_multitask_spectrogram_cnn(tmp_path):
     assert set(res["heads"]) == {"motion", "texture"}
     assert res["heads"]["motion"]["accuracy"] > 0.8  # a vibration is easy to see
     assert np.sum(res["heads"]["texture"]["confusion_matrix"]) == res["n_windows"]
+    # texture within each true motion class: the groups cover every window and their
+    # weighted mean is the overall accuracy
+    by = res["heads"]["texture"]["accuracy_by"]["motion"]
+    assert set(by) == {"still", "slip"}
+    assert sum(g["n"] for g in by.values()) == res["n_windows"]
+    pooled = sum(g["accuracy"] * g["n"] for g in by.values() if g["n"]) / res["n_windows"]
+    assert pooled == pytest.approx(res["heads"]["texture"]["accuracy"])
+    assert set(res["heads"]["motion"]["accuracy_by"]["texture"]) == {"rough", "smooth"}
 
 
 def test_a_diverging_training_is_an_error_not_a_silent_run(tmp_path, action_file):

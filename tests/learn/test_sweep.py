@@ -1,0 +1,197 @@
+"""``tactile sweep`` (issue 14, item 4) and the Dask execution layer it runs on
+(tactile_cli/batch): the grid and its n/a cells, overrides validated before any work, a real
+sweep on a local cluster of worker processes, a restart that skips finished runs (sent to
+a scheduler the test starts), a failed run reported in the table, and Ctrl-C."""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from tactile_cli import interrupt
+from tactile_cli.batch import map_tasks
+from tactile_cli.cli import app
+from tactile_cli.errors import InputError
+from tactile_cli.interrupt import Interrupted
+from tactile_cli.learn.sweep import SweepConfig, expand_grid, load_sweep
+
+runner = CliRunner()
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+#: A tiny FNN: a second or two per run on 2 cores.
+TINY = {"optim.epochs": 1, "optim.patience": 0, "model.head_hidden": [8]}
+
+
+@pytest.fixture(scope="module")
+def vibro(tmp_path_factory) -> tuple[Path, Path]:
+    """Prepared vibro-slip files of seeds 0 (train) and 1 (eval): 3 textures x 2 speeds,
+    2 s each, in 0.5 s segments (24 trials per file)."""
+    from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
+    from tactile_cli.accel.prepare import prepare_file
+    from tactile_cli.ingest import IngestOptions, ingest
+
+    root = tmp_path_factory.mktemp("sweep_data")
+    cfg = VibroSceneConfig.model_validate({"orientations_deg": [0], "motor_rps": [0.16, 0.48],
+                                           "duration_s": 2.0})
+    out = []
+    for seed in (0, 1):
+        simulate_vibro_slip(cfg, root / f"scene{seed}", seed=seed)
+        ingest([root / f"scene{seed}"], root / f"scene{seed}.h5",
+               options=IngestOptions(format="accel-tree"))
+        out.append(prepare_file(root / f"scene{seed}.h5", root / f"prep{seed}.h5",
+                                segment_s=0.5).out)
+    return Path(out[0]), Path(out[1])
+
+
+def _sweep(**changes) -> dict:
+    raw = {
+        "version": 1, "name": "tiny",
+        "models": {
+            "fnn": {"config": str(CONFIGS / "train_fnn_vibro.yaml"),
+                    "overrides": {"model.hidden": [16]}},
+            "cnn2d": {"config": str(CONFIGS / "train_cnn2d_vibro.yaml"),
+                      "by_window": {400: {"model.n_fft": 40, "model.hop": 20}}},
+        },
+        "windows": [{"window": 50, "stride": 25}, {"window": 25, "stride": 25}],
+        "channel_sets": {"Lx": ["L_x"], "bad": ["Q_x"]},
+        "overrides": TINY,
+        "targets": {"motion": 0.05},
+    }
+    raw.update(changes)
+    return raw
+
+
+def test_grid_order_names_overrides_and_na():
+    raw = _sweep(windows=[{"window": 400, "stride": 200}, {"window": 25, "stride": 10}],
+                 channel_sets={"L3R3": ["L_x", "L_y", "L_z", "R_x", "R_y", "R_z"],
+                               "Lx": ["L_x"]})
+    raw["models"]["fnn"]["overrides"]["optim.epochs"] = 2
+    planned = expand_grid(SweepConfig.model_validate(raw))
+    assert [r.name for r in planned] == [
+        "fnn-w400-L3R3", "fnn-w400-Lx", "fnn-w25-L3R3", "fnn-w25-Lx",
+        "cnn2d-w400-L3R3", "cnn2d-w400-Lx", "cnn2d-w25-L3R3", "cnn2d-w25-Lx"]
+    by = {r.name: r for r in planned}
+    fnn = by["fnn-w25-Lx"].config
+    assert fnn["data"]["window"] == 25 and fnn["data"]["stride"] == 10
+    assert fnn["data"]["channels"] == ["L_x"]
+    assert fnn["optim"]["epochs"] == 2  # the model's overrides win over the sweep's
+    assert fnn["model"]["hidden"] == [16]
+    cnn = by["cnn2d-w400-L3R3"]
+    assert cnn.family == "cnn2d_spectrogram" and cnn.config["model"]["n_fft"] == 40
+    na = by["cnn2d-w25-Lx"]
+    assert na.status == "n/a" and na.config is None and "window 25" in na.reason
+
+
+def test_bad_override_and_bad_sweep_keys_are_one_line_errors(tmp_path: Path):
+    (tmp_path / "a.h5").write_bytes(b"")
+    raw = _sweep(train_data=[str(tmp_path / "a.h5")])
+    raw["overrides"] = {**TINY, "optim.epoch": 3}
+    path = tmp_path / "sweep.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 2
+    err = res.stderr.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in res.output
+    assert str(path) in err and "run fnn-w50-Lx" in err and "unknown key `optim.epoch`" in err
+    assert not (tmp_path / "out").exists()  # refused before any work
+
+    raw = _sweep()
+    raw["windowz"] = []
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    with pytest.raises(InputError, match=r"line \d+: unknown key `windowz`"):
+        load_sweep(path)
+    raw = _sweep(models={"f/n": {"config": "x.yaml"}})
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    with pytest.raises(InputError, match="must be letters"):
+        load_sweep(path)
+
+
+def _table(out: Path) -> dict[str, dict[str, str]]:
+    with open(out / "table.csv", newline="") as f:
+        return {r["run"]: r for r in csv.DictReader(f)}
+
+
+def test_sweep_on_a_local_cluster_then_restart_on_a_given_scheduler(vibro, tmp_path: Path,
+                                                                     monkeypatch):
+    from distributed import LocalCluster
+
+    train, test = vibro
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "sweep.yaml"
+    raw = _sweep(train_data=[str(train)], eval={"data": [str(test)], "split": "test"})
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(out), "--workers", "2",
+                              "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "local Dask cluster of 2 worker process(es)" in res.stdout
+    rows = _table(out)
+    assert [r["status"] for r in rows.values()] == ["ok", "failed", "ok", "failed"] + ["n/a"] * 4
+    assert "'Q_x' is not a channel" in rows["fnn-w50-bad"]["error"]
+    assert "\n" not in rows["fnn-w50-bad"]["error"]
+    assert "by_window lists no window 50" in rows["cnn2d-w50-Lx"]["error"]
+    ok = rows["fnn-w50-Lx"]
+    assert 0 <= float(ok["motion_acc_pct"]) <= 100 and float(ok["speed_cm_s_mae"]) >= 0
+    assert int(ok["n_params"]) > 0 and float(ok["latency_ms"]) > 0
+    for name in ("sweep.json", "table.md", "sweep_results.json", "accuracy_vs_window.png",
+                 "speed_accuracy.png"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "accuracy_vs_window.png").read_bytes()[:4] == b"\x89PNG"
+    plan = json.loads((out / "sweep.json").read_text())
+    assert plan["train_data"][0]["sha256"] and plan["sweep_file"]["path"] == str(path)
+    assert len(plan["runs"]) == 8
+    results = json.loads((out / "sweep_results.json").read_text())
+    assert results["pick"]["run"] in ("fnn-w50-Lx", "fnn-w25-Lx")
+    assert sorted(p.name for p in (out / "runs").iterdir()) == ["fnn-w25-Lx", "fnn-w50-Lx"]
+    assert (out / "runs" / "fnn-w50-Lx" / "eval" / "prep1.test" / "metrics.json").is_file()
+
+    # restart: one finished run kept, one removed; sent to a scheduler started here
+    kept = out / "runs" / "fnn-w50-Lx" / "model.pt"
+    mtime = kept.stat().st_mtime_ns
+    import shutil
+
+    shutil.rmtree(out / "runs" / "fnn-w25-Lx")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
+        res = runner.invoke(app, ["sweep", str(path), "--out", str(out), "--scheduler",
+                                  cluster.scheduler_address, "--json"])
+    assert res.exit_code == 0, res.output
+    result = json.loads(res.stdout)
+    assert result["where"] == f"Dask scheduler {cluster.scheduler_address}"
+    assert result["n_skipped"] == 1 and result["n_ok"] == 2 and result["n_failed"] == 2
+    assert kept.stat().st_mtime_ns == mtime
+    assert (out / "runs" / "fnn-w25-Lx" / "model.pt").is_file()
+
+
+def _slow_double(x: int) -> int:
+    time.sleep(0.2 if x else 30)
+    if x == 2:
+        raise ValueError("two\nis bad")
+    return 2 * x
+
+
+def test_map_tasks_reports_failures_and_stops_on_interrupt():
+    results = list(map_tasks(_slow_double, [1, 2, 3], workers=0))
+    assert [(r.ok, r.value, r.error) for r in results] == [
+        (True, 2, None), (False, None, "ValueError: two"), (True, 6, None)]
+    seen = []
+
+    def on_progress(c) -> None:
+        seen.append(c)
+        if c.done:
+            interrupt.request()
+
+    try:
+        started = time.perf_counter()
+        with pytest.raises(Interrupted):
+            list(map_tasks(_slow_double, [1, 0], workers=1, on_progress=on_progress))
+        assert time.perf_counter() - started < 25  # task 0 (30 s) did not hold it up
+    finally:
+        interrupt.clear()
+    assert seen[0].total == 2 and seen[0].running == 1
