@@ -177,7 +177,7 @@ bench-long: $(STAMP)
 # runs of 2 epochs on 2 s recordings took 140 s; the grid trains 128 runs of 5 epochs, the
 # one-axis sets faster). A stopped sweep restarted skips its finished runs;
 # SWEEP_FLAGS="--scheduler tcp://host:8786" sends the runs to an existing Dask cluster.
-SWEEP_OUT ?= benchmarks/sweep_vibro
+SWEEP_OUT ?= out/sweep_vibro
 SWEEP_DATA := $(SWEEP_OUT)/data
 SWEEP_FLAGS ?=
 sweep-vibro: $(STAMP)

@@ -157,6 +157,9 @@ class RunPoint:
     pareto: bool = False
     within_margin: bool = False
     input: dict[str, Any] | None = None  # metrics.json ``input``: the evaluation data's
+    score_ci95: list[float] | None = None
+    """95 % bootstrap interval over trials of ``score`` (fractions) where the evaluation
+    has one (cross-validated runs: accuracy, macro F1, per-trial accuracy), else None."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -297,6 +300,21 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
     return float(value)
 
 
+def _score_ci(metrics: dict[str, Any], metric: str) -> list[float] | None:
+    """The 95 % interval of the score where the evaluation records one, else None."""
+    head = metrics["heads"][metrics["primary_head"]]
+    if metric in ("accuracy", "macro_f1"):
+        ci = head.get(f"{metric}_ci95")
+    elif metric == "trial_accuracy":
+        ci = (head.get("per_trial") or {}).get("majority_accuracy_ci95")
+    else:
+        ci = None
+    if (isinstance(ci, list) and len(ci) == 2
+            and all(isinstance(v, int | float) and math.isfinite(v) for v in ci)):
+        return [float(ci[0]), float(ci[1])]
+    return None
+
+
 def run_labels(run_dirs: Sequence[Path], families: Sequence[str]) -> list[str]:
     """``family/<folder name>``; ``family/<parent>/<folder>`` where folder names repeat."""
     names = [d.resolve().name for d in run_dirs]
@@ -341,7 +359,7 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
         data=[{k: d.get(k) for k in ("path", "sha256", "recordings_sha256", "n_trials")}
               for d in m.get("data", [])],
         latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
-        input=m.get("input"),
+        input=m.get("input"), score_ci95=_score_ci(m, metric),
     )
 
 
@@ -484,7 +502,9 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
     """The chart as PNG bytes: score (%) against batch-1 median latency per window (ms, log
     axis), every run labelled ``family/name``, the Pareto front as a dashed staircase with
     ringed points, the margin band under the best score, the needed model starred and
-    the fastest within the margin as a diamond. Runs without latency are listed below."""
+    the fastest within the margin as a diamond; a run whose evaluation has a 95 % interval
+    of the score (cross-validated runs) gets it as a vertical error bar. Runs without
+    latency are listed below."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -499,6 +519,13 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
         if pts:
             ax.scatter([p.latency_ms for p in pts], [100 * p.score for p in pts], s=46,
                        color=colour[fam], label=fam, zorder=3)
+            for p in pts:
+                if p.score_ci95 is not None:
+                    lo, hi = (100 * v for v in p.score_ci95)
+                    ax.errorbar([p.latency_ms], [100 * p.score], capsize=3, lw=1,
+                                yerr=[[max(0.0, 100 * p.score - lo)],
+                                      [max(0.0, hi - 100 * p.score)]],
+                                color=colour[fam], alpha=0.6, zorder=2.5)
     if cmp.pareto:
         xs = [p.latency_ms for p in cmp.pareto]
         ys = [100 * p.score for p in cmp.pareto]
@@ -529,7 +556,8 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
         lo = min(p.latency_ms for p in timed)
         hi = max(p.latency_ms for p in timed)
         ax.set_xlim(lo / 1.6, hi * 2.2)  # room for the labels on the right
-    ys_all = [100 * p.score for p in cmp.points]
+    ys_all = [100 * p.score for p in cmp.points] + [
+        100 * v for p in timed if p.score_ci95 is not None for v in p.score_ci95]
     span = max(max(ys_all) - min(ys_all), cmp.margin_pp, 0.5)
     ax.set_ylim(min(ys_all) - 0.15 * span, max(ys_all) + 0.15 * span)
     ax.set_xlabel("latency per window, batch 1, median (ms)")
