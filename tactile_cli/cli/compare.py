@@ -22,6 +22,7 @@ FLAGS: dict[str, Flag] = {
     "metric": "--metric",
     "margin_pp": "--margin",
     "out_dir": "--out",
+    "targets": "--target",
 }
 
 
@@ -63,10 +64,19 @@ def compare_command(
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print compare.json to stdout.")
                        ] = False,
+    target: Annotated[
+        list[str] | None,
+        typer.Option("--target", help="HEAD=VALUE, repeatable: an accuracy (fraction) a "
+                     "classification head must reach or an MAE a regression head must not "
+                     "exceed; the model this scene needs is then the smallest meeting every "
+                     "target (e.g. --target motion=0.948 --target speed_cm_s=3.4).",
+                     metavar="HEAD=VALUE", show_default=False),
+    ] = None,
 ) -> None:
     """Compare runs on one evaluation: accuracy against latency per window (batch 1), the
     Pareto front, and the model this scene needs (the fewest parameters within --margin
-    of the best accuracy, ties by latency) beside the fastest within the margin."""
+    of the best accuracy, or meeting every --target, ties by latency) beside the fastest
+    such run."""
 
     def body() -> None:
         from rich.console import Console
@@ -74,7 +84,8 @@ def compare_command(
         from ..learn.compare import compare, comparison_record, write_comparison
         from ..learn.runs import dumps
 
-        cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric)
+        cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric,
+                      targets=_parse_targets(target or []))
         files = write_comparison(cmp, out) if out is not None else None
         for note in cmp.notes:
             print(f"tactile: warning: {note}", file=sys.stderr)
@@ -91,6 +102,25 @@ def compare_command(
             typer.echo(f"wrote {files.png}, {files.csv.name}, {files.json.name}")
 
     run_guarded(body, flags=FLAGS)
+
+
+def _parse_targets(items: list[str]) -> dict[str, float]:
+    """``["motion=0.948", "speed_cm_s=3.4"]`` -> ``{"motion": 0.948, "speed_cm_s": 3.4}``."""
+    from ..errors import InputError
+
+    out: dict[str, float] = {}
+    for item in items:
+        head, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = float("nan")
+        if not sep or not head.strip() or number != number:
+            raise InputError(f"--target {item!r}: give HEAD=VALUE, e.g. motion=0.948")
+        if head.strip() in out:
+            raise InputError(f"--target {head.strip()!r} given twice")
+        out[head.strip()] = number
+    return out
 
 
 def _table(cmp: Comparison) -> Table:
@@ -116,7 +146,9 @@ def _table(cmp: Comparison) -> Table:
             "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
             f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
             "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
-            "needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
+            "needed" if row["needed"] else ("fastest" if row["fastest"] else "")
+            + ("" if row["meets_targets"] is None else
+               (" (meets targets)" if row["meets_targets"] else " (misses a target)")))
     return table
 
 

@@ -23,7 +23,11 @@ The Pareto front holds the runs no other run dominates; run *s* dominates run *r
 "The model this scene needs" (the issue's "model no more than a scene needs"): among the
 runs whose score is within ``margin_pp`` percentage points of the best, the one with the
 fewest parameters, ties broken by lower latency then by label. The fastest run within the
-margin (lowest batch-1 latency, ties by fewer parameters) is named beside it.
+margin (lowest batch-1 latency, ties by fewer parameters) is named beside it. With
+``targets`` (``{"motion": 0.948, "object": 0.96, "speed_cm_s": 3.4}``: an accuracy, as a
+fraction, that a classification head must reach, or an MAE, in the label's units, that a
+regression head must not exceed) the eligible runs are those meeting every target instead
+of those within the margin, and when none does the comparison says so.
 
 Outputs (:func:`write_comparison`): ``compare.png`` (the chart), ``compare.csv`` (the
 table) and ``compare.json`` (the table, the choice and the provenance: command, tool
@@ -160,6 +164,11 @@ class RunPoint:
     score_ci95: list[float] | None = None
     """95 % bootstrap interval over trials of ``score`` (fractions) where the evaluation
     has one (cross-validated runs: accuracy, macro F1, per-trial accuracy), else None."""
+    head_values: dict[str, float | None] = field(default_factory=dict)
+    """Every head's accuracy (classification, fraction) or MAE (regression, label units)."""
+    head_kinds: dict[str, str] = field(default_factory=dict)
+    meets_targets: bool | None = None
+    """Whether every target of the comparison is met (None: no targets)."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -174,11 +183,17 @@ class Comparison:
     data_name: str
     margin_pp: float
     best: RunPoint
-    needed: RunPoint
+    needed: RunPoint | None  # None only when targets are given and no run meets them
     fastest: RunPoint | None
     pareto: list[RunPoint]  # on the front, by increasing latency
     inputs: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    targets: dict[str, float] = field(default_factory=dict)
+
+    def targets_text(self) -> str:
+        """``motion >= 94.8 %, speed_cm_s MAE <= 3.4`` (empty without targets)."""
+        return describe_targets(self.targets, self.points[0].head_kinds if self.points
+                                else {})
 
     @property
     def metric_label(self) -> str:
@@ -193,22 +208,32 @@ class Comparison:
     def as_dict(self) -> dict[str, Any]:
         return {
             "metric": self.metric, "data_name": self.data_name, "margin_pp": self.margin_pp,
-            "best": self.best.label, "needed": self.needed.label,
+            "best": self.best.label,
+            "needed": None if self.needed is None else self.needed.label,
+            "targets": dict(self.targets),
             "fastest": None if self.fastest is None else self.fastest.label,
             "pareto": [p.label for p in self.pareto],
             "runs": [p.as_dict() for p in self.points], "notes": list(self.notes),
         }
 
     def summary(self) -> str:
-        """Two sentences naming the model this scene needs and the fastest within margin."""
+        """Two sentences naming the model this scene needs and the fastest eligible one."""
         n = self.needed
+        where = "the margin" if not self.targets else "the targets"
+        if n is None:
+            return (f"no run meets every target ({self.targets_text()}); best "
+                    f"{self.metric_label}: {self.best.label} ({100 * self.best.score:.2f} %)")
         text = (f"the model this scene needs: {n.label} ({n.n_params:,} parameters, "
-                f"{self.metric_label} {100 * n.score:.2f} %, {_ms(n.latency_ms)} per window), "
-                f"the smallest within {self.margin_pp:g} pp of the best ({self.best.label}, "
-                f"{100 * self.best.score:.2f} %)")
+                f"{n.size_mb:.2f} MB, {self.metric_label} {100 * n.score:.2f} %, "
+                f"{_ms(n.latency_ms)} per window), ")
+        if self.targets:
+            text += f"the smallest meeting {self.targets_text()}"
+        else:
+            text += (f"the smallest within {self.margin_pp:g} pp of the best "
+                     f"({self.best.label}, {100 * self.best.score:.2f} %)")
         f = self.fastest
         if f is not None:
-            text += (f"; fastest within the margin: {f.label} ({_ms(f.latency_ms)}, "
+            text += (f"; fastest within {where}: {f.label} ({_ms(f.latency_ms)}, "
                      f"{f.n_params:,} parameters)")
         return text
 
@@ -337,6 +362,39 @@ def distinct_run_paths(run_dirs: Sequence[str | Path]) -> list[str]:
     return [p.relative_to(common).as_posix() for p in paths]
 
 
+def describe_targets(targets: dict[str, float], kinds: dict[str, str]) -> str:
+    """``motion >= 94.8 %, speed_cm_s MAE <= 3.4`` for targets of heads of these kinds."""
+    return ", ".join(f"{h} >= {100 * v:g} %" if kinds.get(h) == "classification"
+                     else f"{h} MAE <= {v:g}" for h, v in targets.items())
+
+
+def meets_targets(values: dict[str, float | None], kinds: dict[str, str],
+                  targets: dict[str, float]) -> bool:
+    """True when every target is met: a classification head's accuracy (fraction) at least
+    its target, a regression head's MAE at most its target; a missing value fails."""
+    for head, target in targets.items():
+        got = values.get(head)
+        if got is None or not math.isfinite(got):
+            return False
+        if kinds.get(head) == "classification":
+            if got < target - 1e-12:
+                return False
+        elif got > target + 1e-12:
+            return False
+    return True
+
+
+def _head_values(m: dict[str, Any]) -> tuple[dict[str, float | None], dict[str, str]]:
+    values: dict[str, float | None] = {}
+    kinds: dict[str, str] = {}
+    for name, h in (m.get("heads") or {}).items():
+        kind = "regression" if h.get("kind") == "regression" else "classification"
+        value = h.get("mae") if kind == "regression" else h.get("accuracy")
+        kinds[name] = kind
+        values[name] = float(value) if isinstance(value, int | float) else None
+    return values, kinds
+
+
 def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> RunPoint:
     """The :class:`RunPoint` of ``RUN/eval/<data_name>/metrics.json``."""
     path = run_dir / runs.EVAL_DIR / data_name / runs.METRICS_JSON
@@ -348,6 +406,7 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
     head = m["heads"][m["primary_head"]]
     lat = m.get("latency") or {}
     model = m.get("model") or {}
+    values, kinds = _head_values(m)
     return RunPoint(
         run=str(run_dir), label=label or f"{m.get('family', '?')}/{run_dir.name}",
         family=str(m.get("family", "?")), eval_name=data_name, metrics_path=str(path),
@@ -360,6 +419,7 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
               for d in m.get("data", [])],
         latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
         input=m.get("input"), score_ci95=_score_ci(m, metric),
+        head_values=values, head_kinds=kinds,
     )
 
 
@@ -418,9 +478,25 @@ def _check_inputs(points: Sequence[RunPoint], infos: Sequence[dict[str, Any]]) -
     return notes
 
 
+def check_targets(targets: dict[str, float], points: Sequence[RunPoint]) -> None:
+    """Refuse a target for a head some run lacks, and an accuracy target outside 0..1."""
+    for head, value in targets.items():
+        if not math.isfinite(value) or value < 0:
+            raise InputError(f"target {head}={value}: give a number >= 0")
+        for p in points:
+            if head not in p.head_kinds:
+                raise InputError(f"target {head!r}: run {p.label} has no head {head!r} (its "
+                                 f"heads: {', '.join(p.head_kinds) or 'none'})")
+            if p.head_kinds[head] == "classification" and value > 1:
+                raise InputError(f"target {head}={value:g}: an accuracy target is a "
+                                 f"fraction (0.948 for 94.8 %)")
+
+
 def compare_points(points: Sequence[RunPoint], *, margin_pp: float = 0.5,
-                   metric: str = "accuracy", data_name: str = "") -> Comparison:
-    """Mark the Pareto front and the margin on ``points`` (in place) and choose."""
+                   metric: str = "accuracy", data_name: str = "",
+                   targets: dict[str, float] | None = None) -> Comparison:
+    """Mark the Pareto front and the margin on ``points`` (in place) and choose: the
+    fewest parameters within the margin, or, with ``targets``, meeting every target."""
     if not points:
         raise InputError("no runs to compare; give RUN folders")
     if not (math.isfinite(margin_pp) and margin_pp >= 0):
@@ -434,15 +510,25 @@ def compare_points(points: Sequence[RunPoint], *, margin_pp: float = 0.5,
     for p, f, w in zip(points, front, near, strict=True):
         p.pareto, p.within_margin = bool(f), bool(w)
     best = int(max(range(len(points)), key=lambda i: (score[i], -n_params[i])))
-    needed = pick_needed(n_params, lat, near, labels)
-    fastest = pick_fastest(n_params, lat, near, labels)
+    targets = dict(targets or {})
+    eligible = near
+    if targets:
+        check_targets(targets, points)
+        for p in points:
+            p.meets_targets = meets_targets(p.head_values, p.head_kinds, targets)
+        eligible = np.array([bool(p.meets_targets) for p in points])
+    needed = pick_needed(n_params, lat, eligible, labels) if eligible.any() else None
+    fastest = pick_fastest(n_params, lat, eligible, labels) if eligible.any() else None
     on_front = sorted((p for p in points if p.pareto), key=lambda p: (p.latency_ms, -p.score))
     return Comparison(list(points), metric, data_name, float(margin_pp), points[best],
-                      points[needed], None if fastest is None else points[fastest], on_front)
+                      None if needed is None else points[needed],
+                      None if fastest is None else points[fastest], on_front,
+                      targets=targets)
 
 
 def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
-            margin_pp: float = 0.5, metric: str = "accuracy") -> Comparison:
+            margin_pp: float = 0.5, metric: str = "accuracy",
+            targets: dict[str, float] | None = None) -> Comparison:
     """Read every run's evaluation on the same data and compare them.
 
     ``data_name`` is the folder name under ``RUN/eval/`` (default: the one all runs
@@ -467,7 +553,8 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
     points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
     _check_same_data(points)
     notes = _check_inputs(points, infos)
-    cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name)
+    cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name,
+                         targets=targets)
     cmp.notes = notes
     cmp.inputs = [{"path": p.metrics_path, "sha256": sha256_of(p.metrics_path)}
                   for p in points]
@@ -477,7 +564,8 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
 # -- outputs ---------------------------------------------------------------------------------
 TABLE_COLUMNS = ("label", "family", "score_pct", "delta_pp", "accuracy_pct", "macro_f1",
                  "latency_ms_median", "latency_ms_p95", "windows_per_s", "n_params",
-                 "size_mb", "pareto", "within_margin", "needed", "fastest", "run")
+                 "size_mb", "pareto", "within_margin", "needed", "fastest", "meets_targets",
+                 "run")
 
 
 def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
@@ -493,7 +581,7 @@ def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
             "latency_ms_p95": p.latency_p95_ms, "windows_per_s": p.windows_per_s,
             "n_params": p.n_params, "size_mb": p.size_mb, "pareto": p.pareto,
             "within_margin": p.within_margin, "needed": p is cmp.needed,
-            "fastest": p is cmp.fastest, "run": p.run,
+            "fastest": p is cmp.fastest, "meets_targets": p.meets_targets, "run": p.run,
         })
     return rows
 
@@ -535,7 +623,7 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
     best = 100 * cmp.best.score
     ax.axhspan(best - cmp.margin_pp, best, color="C2", alpha=0.12, zorder=1,
                label=f"within {cmp.margin_pp:g} pp of the best")
-    if cmp.needed.latency_ms:
+    if cmp.needed is not None and cmp.needed.latency_ms:
         ax.scatter([cmp.needed.latency_ms], [100 * cmp.needed.score], marker="*", s=320,
                    color="gold", edgecolors="black", zorder=5,
                    label=f"needed: {cmp.needed.label}")

@@ -66,7 +66,7 @@ from ..errors import InputError
 from ..store.outdir import check_output_folder
 from ..store.writer import current_command, sha256_of, utc_now
 from . import runs
-from .compare import pareto_front, pick_needed, within_margin, write_atomic
+from .compare import meets_targets, pareto_front, pick_needed, within_margin, write_atomic
 from .config import parse_config
 from .data import data_files
 
@@ -575,16 +575,12 @@ def _row(run: PlannedRun, out: Path, eval_name: str, heads: dict[str, str],
 
 
 def _meets(row: dict[str, Any], targets: dict[str, float], heads: dict[str, str]) -> bool:
-    for h, value in targets.items():
-        if heads[h] == "classification":
-            got = row.get(f"{h}_acc_pct")
-            if got is None or got / 100 < value - 1e-12:
-                return False
-        else:
-            got = row.get(f"{h}_mae")
-            if got is None or got > value + 1e-12:
-                return False
-    return True
+    values: dict[str, float | None] = {}
+    for h in targets:
+        got = row.get(f"{h}_acc_pct" if heads[h] == "classification" else f"{h}_mae")
+        values[h] = None if got is None else (got / 100 if heads[h] == "classification"
+                                              else got)
+    return meets_targets(values, heads, targets)
 
 
 def pick_run(rows: list[dict[str, Any]], *, targets: dict[str, float], heads: dict[str, str],

@@ -253,3 +253,58 @@ def test_cli_compare_table_files_json_and_errors(runs, tmp_path):
     assert metric.exit_code == 2
     assert ("--metric must be accuracy, macro_f1, trial_accuracy or f1:<class>, got 'recall'"
             in metric.stderr)
+
+
+def _add_heads(run, **heads):
+    """Add heads to a fake run's metrics: name=("classification", accuracy) or
+    ("regression", mae)."""
+    path = run / "eval" / "scene" / "metrics.json"
+    m = json.loads(path.read_text())
+    for name, (kind, value) in heads.items():
+        m["heads"][name] = ({"head": name, "kind": kind, "n": 1000, "accuracy": value,
+                             "macro_f1": value, "per_class": [{"name": "a", "f1": value}]}
+                            if kind == "classification" else
+                            {"head": name, "kind": kind, "n": 1000, "mae": value, "rmse": value})
+    path.write_text(json.dumps(m))
+
+
+def test_targets_pick_the_smallest_run_meeting_every_one(tmp_path):
+    """With targets the choice is the fewest parameters among the runs meeting all of them
+    (accuracy at least, MAE at most), not within the margin of the best score."""
+    big = fake_run(tmp_path, "big", "cnn2d", accuracy=0.97, latency_ms=0.5, n_params=90_000)
+    mid = fake_run(tmp_path, "mid", "lstm", accuracy=0.95, latency_ms=0.4, n_params=40_000)
+    tiny = fake_run(tmp_path, "tiny", "mlp", accuracy=0.96, latency_ms=0.1, n_params=900)
+    _add_heads(big, object=("classification", 0.98), speed=("regression", 1.1))
+    _add_heads(mid, object=("classification", 0.961), speed=("regression", 3.4))
+    _add_heads(tiny, object=("classification", 0.90), speed=("regression", 2.0))  # texture
+    targets = {"action": 0.948, "object": 0.96, "speed": 3.4}
+    cmp = compare([big, mid, tiny], targets=targets)
+    assert [p.meets_targets for p in cmp.points] == [True, True, False]
+    assert cmp.needed.label == "lstm/mid"  # MAE exactly at the target meets it
+    assert cmp.fastest.label == "lstm/mid"
+    assert "the smallest meeting action >= 94.8 %, object >= 96 %, speed MAE <= 3.4" \
+        in cmp.summary()
+    # the margin rule looks at the primary score only
+    assert compare([big, mid, tiny], margin_pp=1.0).needed.label == "mlp/tiny"
+
+    none = compare([mid, tiny], targets={"action": 0.99})
+    assert none.needed is None and none.fastest is None
+    assert none.summary().startswith("no run meets every target (action >= 99 %)")
+    files = write_comparison(none, tmp_path / "none")
+    assert json.loads(files.json.read_text())["needed"] is None
+
+    with pytest.raises(InputError, match="run cnn2d/big has no head 'grip'"):
+        compare([big, mid], targets={"grip": 0.5})
+    with pytest.raises(InputError, match="an accuracy target is a fraction"):
+        compare([big, mid], targets={"object": 96})
+
+
+def test_cli_compare_targets(tmp_path):
+    a = fake_run(tmp_path, "a", "cnn2d", accuracy=0.97, latency_ms=0.5, n_params=90_000)
+    b = fake_run(tmp_path, "b", "mlp", accuracy=0.96, latency_ms=0.1, n_params=900)
+    res = runner.invoke(app, ["compare", str(a), str(b), "--target", "action=0.965"])
+    assert res.exit_code == 0, res.output
+    assert "the model this scene needs: cnn2d/a" in " ".join(res.output.split())
+    for bad in ("action", "action=x", "=0.5"):
+        res = runner.invoke(app, ["compare", str(a), str(b), "--target", bad])
+        assert res.exit_code == 2 and "give HEAD=VALUE" in res.output, res.output
