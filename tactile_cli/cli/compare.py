@@ -146,7 +146,7 @@ def _table(cmp: Comparison) -> Table:
             "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
             f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
             "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
-            "needed" if row["needed"] else ("fastest" if row["fastest"] else "")
+            ("needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
             + ("" if row["meets_targets"] is None else
                (" (meets targets)" if row["meets_targets"] else " (misses a target)")))
     return table
