@@ -23,6 +23,21 @@ ACTIONS: tuple[str, ...] = ("approach", "press", "slip", "release")
 BIN_S: float = 0.02
 
 
+#: The eight accelerometer channel configurations of paper 001 (sec. 4) by name: L and R
+#: are the left and right fingertips, x/y/z their axes; values are channel names of the
+#: ``accel`` stream in stored order. A training config may name one (``channels: L3R3``).
+CHANNEL_SETS: dict[str, tuple[str, ...]] = {
+    "L3R3": ("L_x", "L_y", "L_z", "R_x", "R_y", "R_z"),
+    "L3": ("L_x", "L_y", "L_z"),
+    "LxRx": ("L_x", "R_x"),
+    "Lx": ("L_x",),
+    "LyRy": ("L_y", "R_y"),
+    "Ly": ("L_y",),
+    "LzRz": ("L_z", "R_z"),
+    "Lz": ("L_z",),
+}
+
+
 def action_index(label: str) -> int | None:
     """Index into :data:`ACTIONS` of an annotation ``label``, matched ignoring case and
     surrounding spaces (``" Press"`` is 1); ``None`` for a label that names no action."""
@@ -30,4 +45,4 @@ def action_index(label: str) -> int | None:
     return ACTIONS.index(name) if name in ACTIONS else None
 
 
-__all__ = ["ACTIONS", "BIN_S", "action_index"]
+__all__ = ["ACTIONS", "BIN_S", "CHANNEL_SETS", "action_index"]

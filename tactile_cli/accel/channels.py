@@ -11,18 +11,11 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import InputError
+from ..vocabulary import CHANNEL_SETS
 
-#: Configuration name -> channel names of the ``accel`` stream, in stored order.
-CHANNEL_CONFIGS: dict[str, tuple[str, ...]] = {
-    "L3R3": ("L_x", "L_y", "L_z", "R_x", "R_y", "R_z"),
-    "L3": ("L_x", "L_y", "L_z"),
-    "LxRx": ("L_x", "R_x"),
-    "Lx": ("L_x",),
-    "LyRy": ("L_y", "R_y"),
-    "Ly": ("L_y",),
-    "LzRz": ("L_z", "R_z"),
-    "Lz": ("L_z",),
-}
+#: Configuration name -> channel names of the ``accel`` stream, in stored order (the
+#: table lives in :mod:`tactile_cli.vocabulary` so training configs can name a set).
+CHANNEL_CONFIGS: dict[str, tuple[str, ...]] = CHANNEL_SETS
 
 
 def channel_config(name: str) -> tuple[str, ...]:

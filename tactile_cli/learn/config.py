@@ -51,7 +51,7 @@ from pydantic import (
 
 from ..config_file import check_fits_in_memory, key_line, read_yaml
 from ..errors import InputError
-from ..vocabulary import BIN_S
+from ..vocabulary import BIN_S, CHANNEL_SETS
 
 #: Summary features of the MLP family, in the order they are computed (per channel).
 SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope")
@@ -127,9 +127,21 @@ class DataConfig(_Model):
     """Channel names of the stream's sensor, in the order the model sees them. A name with
     ``*``, ``?`` or ``[`` is a glob pattern (``ele*``, ``txl?_z``) matched against the
     sensor's channel names in their stored order; ``tactile train`` writes the matched names
-    into the run's resolved config."""
+    into the run's resolved config. A single string naming one of paper 001's accelerometer
+    channel configurations (``channels: LxRx``; :data:`tactile_cli.vocabulary.CHANNEL_SETS`)
+    stands for its channels."""
     window: int = Field(ge=1, le=_MAX_SAMPLES)
     """Samples per window."""
+
+    @field_validator("channels", mode="before")
+    @classmethod
+    def _named_set(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            if value in CHANNEL_SETS:
+                return list(CHANNEL_SETS[value])
+            raise ValueError(f"{value!r} is not a channel configuration "
+                             f"({', '.join(CHANNEL_SETS)}); give a list of channel names")
+        return value
     stride: int = Field(default=1, ge=1, le=_MAX_SAMPLES)
     """Samples between the ends of consecutive windows."""
     pad: Literal["none", "zero", "edge"] = "none"

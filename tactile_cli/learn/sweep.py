@@ -65,6 +65,7 @@ from ..config_file import read_yaml, validation_error
 from ..errors import InputError
 from ..store.outdir import check_output_folder
 from ..store.writer import current_command, sha256_of, utc_now
+from ..vocabulary import CHANNEL_SETS
 from . import runs
 from .compare import meets_targets, pareto_front, pick_needed, within_margin, write_atomic
 from .config import parse_config
@@ -154,6 +155,20 @@ class SweepConfig(_Model):
     models: dict[str, ModelSpec] = Field(min_length=1, max_length=MAX_MODELS)
     windows: list[WindowSpec] = Field(min_length=1, max_length=MAX_WINDOWS)
     channel_sets: dict[str, list[str]] = Field(min_length=1, max_length=MAX_CHANNEL_SETS)
+    """Name -> channels; a list of names of paper 001's accelerometer configurations
+    (``[L3R3, Lx]``, :data:`tactile_cli.vocabulary.CHANNEL_SETS`) stands for those sets."""
+
+    @field_validator("channel_sets", mode="before")
+    @classmethod
+    def _named_sets(cls, value: Any) -> Any:
+        if isinstance(value, list) and all(isinstance(v, str) for v in value):
+            unknown = [v for v in value if v not in CHANNEL_SETS]
+            if unknown:
+                raise ValueError(f"unknown channel configuration(s) {', '.join(unknown)}: "
+                                 f"name some of {', '.join(CHANNEL_SETS)} or give a mapping "
+                                 "name -> channel list")
+            return {v: list(CHANNEL_SETS[v]) for v in value}
+        return value
     overrides: _Overrides = Field(default={}, max_length=MAX_OVERRIDES)
     targets: dict[str, float] = Field(default={}, max_length=100)
     """Head -> the accuracy (fraction, at least) or MAE (label units, at most) a run must

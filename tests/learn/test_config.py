@@ -91,3 +91,13 @@ def test_shipped_configs_are_valid_and_the_lstm_is_the_papers():
     assert lstm.model.head_hidden == []
     assert lstm.data.channels == ["net"] and lstm.data.stream == "event_counts"
     assert [t.name for t in lstm.data.targets] == ["action"]
+
+
+def test_a_channel_configuration_can_be_named(tmp_path):
+    """`channels: LxRx` stands for paper 001's set; an unknown name is a one-line error."""
+    cfg = load_config(_write(tmp_path, GOOD.replace("channels: [net]", "channels: LxRx")))
+    assert cfg.data.channels == ["L_x", "R_x"]
+    assert load_config(REPO / "configs" / "train_lstm_vibro.yaml").data.channels == [
+        "L_x", "L_y", "L_z", "R_x", "R_y", "R_z"]
+    with pytest.raises(InputError, match="'L4' is not a channel configuration"):
+        load_config(_write(tmp_path, GOOD.replace("channels: [net]", "channels: L4")))

@@ -195,3 +195,13 @@ def test_map_tasks_reports_failures_and_stops_on_interrupt():
     finally:
         interrupt.clear()
     assert seen[0].total == 2 and seen[0].running == 1
+
+
+def test_channel_sets_by_name():
+    """A list of paper 001's configuration names stands for those sets, in that order."""
+    cfg = SweepConfig.model_validate(_sweep(channel_sets=["LzRz", "Lx"]))
+    assert cfg.channel_sets == {"LzRz": ["L_z", "R_z"], "Lx": ["L_x"]}
+    with pytest.raises(ValueError, match="unknown channel configuration"):
+        SweepConfig.model_validate(_sweep(channel_sets=["L3R3", "L9"]))
+    assert list(load_sweep(CONFIGS / "sweep_vibro.yaml").channel_sets) == [
+        "L3R3", "L3", "LxRx", "Lx", "LyRy", "Ly", "LzRz", "Lz"]
