@@ -219,3 +219,27 @@ __all__ = ["check_fits_in_memory", "decode_utf8", "describe_validation", "format
            "key_line",
            "machine_memory_bytes", "missing_file_error", "os_error", "parse_yaml", "read_bytes",
            "read_config_text", "read_text", "read_yaml", "validation_error"]
+
+
+def load_yaml_model(path: str | Path, model: Any, *, not_a_mapping: str,
+                    empty: str | None = None, what: str = "config file",
+                    describe: Callable[[dict[str, Any]], str] = describe_validation) -> Any:
+    """Read the YAML mapping in ``path`` and validate it as ``model`` (a pydantic model
+    class). Every problem is one :class:`InputError` naming the file: ``not_a_mapping`` for
+    a document that is not a mapping, a pydantic error with its key and line (worded by
+    ``describe``). An empty file gives the model's defaults, or the error ``empty``."""
+    from pydantic import ValidationError
+
+    path = Path(path)
+    text, raw = read_yaml(path, what)
+    if raw is None:
+        if empty is not None:
+            raise InputError(empty, path=path)
+        raw = {}
+    if not isinstance(raw, dict):
+        raise InputError(not_a_mapping, path=path)
+    try:
+        return model.model_validate(raw)
+    except ValidationError as exc:
+        raise validation_error(exc, text, path, describe=describe) from None
+

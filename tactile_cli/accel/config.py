@@ -13,10 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config_file import read_yaml, validation_error
-from ..errors import InputError
+from ..config_file import load_yaml_model
 
 
 class _Model(BaseModel):
@@ -152,13 +151,6 @@ def _describe(err: dict[str, Any]) -> str:
 
 def load_vibro_config(path: str | Path) -> VibroSceneConfig:
     """Read and validate a scene config file (one :class:`InputError` line on a problem)."""
-    path = Path(path)
-    text, raw = read_yaml(path)
-    raw = {} if raw is None else raw
-    if not isinstance(raw, dict):
-        raise InputError("a vibro-slip scene config is a YAML mapping; see "
-                         "configs/scene_vibro_slip.yaml", path=path)
-    try:
-        return VibroSceneConfig.model_validate(raw)
-    except ValidationError as exc:
-        raise validation_error(exc, text, path, describe=_describe) from None
+    return load_yaml_model(path, VibroSceneConfig, describe=_describe,
+                           not_a_mapping="a vibro-slip scene config is a YAML mapping; see "
+                           "configs/scene_vibro_slip.yaml")

@@ -25,12 +25,12 @@ FLAGS: dict[str, Flag] = {
 
 def sweep_command(
     config: Annotated[Path, typer.Argument(help="Sweep file (YAML, see configs/sweep_vibro.yaml).",
-                                           show_default=False, metavar="SWEEP")],
+                                           show_default=False, metavar="CONFIG")],
     out: Annotated[
         Path, typer.Option("--out", "-o", help="Folder for sweep.json, table.csv/.md, "
                            "sweep_results.json, the figures and runs/ (a stopped sweep "
                            "given the same folder skips its finished runs).",
-                           metavar="DIR", show_default=False)],
+                           metavar="FOLDER", show_default=False)],
     data: Annotated[
         list[Path] | None,
         typer.Option("--data", "-d", help="Training file(s); replace the sweep file's "

@@ -58,10 +58,10 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .._version import __version__
-from ..config_file import read_yaml, validation_error
+from ..config_file import load_yaml_model, read_yaml
 from ..errors import InputError
 from ..store.outdir import check_output_folder
 from ..store.writer import current_command, sha256_of, utc_now
@@ -202,15 +202,10 @@ class SweepConfig(_Model):
 def load_sweep(path: str | Path) -> SweepConfig:
     """Read and validate a sweep file; any problem is one InputError naming the file, the
     line and the key."""
-    path = Path(path)
-    text, raw = read_yaml(path, "sweep file")
-    if not isinstance(raw, dict):
-        raise InputError("a sweep file is a YAML mapping with keys models, windows, "
-                         "channel_sets (see configs/sweep_vibro.yaml)", path=path)
-    try:
-        return SweepConfig.model_validate(raw)
-    except ValidationError as exc:
-        raise validation_error(exc, text, path) from None
+    hint = ("a sweep file is a YAML mapping with keys models, windows, channel_sets (see "
+            "configs/sweep_vibro.yaml)")
+    return load_yaml_model(path, SweepConfig, not_a_mapping=hint, empty=hint,
+                           what="sweep file")
 
 
 # -- the grid ---------------------------------------------------------------------------------

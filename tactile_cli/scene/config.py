@@ -24,7 +24,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..config_file import read_yaml, validation_error
+from ..config_file import load_yaml_model
 from ..errors import InputError
 from ..vocabulary import BIN_S
 
@@ -329,17 +329,9 @@ class SceneConfig(_Model):
 def load_scene_config(path: str | Path) -> SceneConfig:
     """Read and validate a scene config file; any problem is one :class:`InputError` line
     naming the file, the line and the key."""
-    path = Path(path)
-    text, raw = read_yaml(path)
-    if raw is None:
-        raw = {}
-    if not isinstance(raw, dict):
-        raise InputError("a scene config is a YAML mapping of sections (trials, timing, fos, "
-                         "...); see configs/scene_marker_events.yaml", path=path)
-    try:
-        return SceneConfig.model_validate(raw)
-    except ValidationError as exc:
-        raise validation_error(exc, text, path, describe=_describe) from None
+    return load_yaml_model(path, SceneConfig, describe=_describe,
+                           not_a_mapping="a scene config is a YAML mapping of sections "
+                           "(trials, timing, fos, ...); see configs/scene_marker_events.yaml")
 
 
 def _describe(err: dict[str, Any]) -> str:

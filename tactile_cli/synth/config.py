@@ -15,7 +15,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_file import read_yaml, validation_error
+from ..config_file import load_yaml_model
 from ..errors import InputError
 from ..vocabulary import BIN_S
 
@@ -248,19 +248,13 @@ def load_synth_config(path: str | Path | None) -> SynthConfig:
     :class:`InputError` naming the file, the line and the key."""
     if path is None:
         return SynthConfig()
-    path = Path(path)
-    text, raw = read_yaml(path)
-    if raw is None:  # an empty (or all-comment) file: a truncated config, not the defaults
-        raise InputError("empty config; a synth config is a YAML mapping of sections (levels, "
-                         "timing, fos, ...), see configs/synth_fos.yaml (leave the config out "
-                         "for the defaults)", path=path)
-    if not isinstance(raw, dict):
-        raise InputError("a synth config is a YAML mapping of sections (levels, timing, fos, "
-                         "...); see configs/synth_fos.yaml", path=path)
-    try:
-        return SynthConfig.model_validate(raw)
-    except ValidationError as exc:
-        raise validation_error(exc, text, path, describe=_describe) from None
+    # an empty (or all-comment) file: a truncated config, not the defaults
+    return load_yaml_model(
+        path, SynthConfig, describe=_describe,
+        empty="empty config; a synth config is a YAML mapping of sections (levels, timing, "
+        "fos, ...), see configs/synth_fos.yaml (leave the config out for the defaults)",
+        not_a_mapping="a synth config is a YAML mapping of sections (levels, timing, fos, "
+        "...); see configs/synth_fos.yaml")
 
 
 def _describe(err: dict[str, Any]) -> str:
