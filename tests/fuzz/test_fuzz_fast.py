@@ -39,7 +39,8 @@ def _source_key() -> str:
     root = Path(__file__).resolve().parents[2]
     h = hashlib.sha256()
     files = sorted([*(root / "tactile_cli").rglob("*.py"), *(root / "tests" / "fuzz").glob("*.py"),
-                    *(root / "tests" / "factories").glob("*.py"), *(root / "configs").glob("*")])
+                    *(root / "tests" / "factories").glob("*.py"),
+                    *(p for p in (root / "configs").rglob("*") if p.is_file())])
     for p in files:
         h.update(str(p.relative_to(root)).encode())
         h.update(p.read_bytes())
