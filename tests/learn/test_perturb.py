@@ -201,8 +201,11 @@ def test_perturb_input_errors(runs, heldout_file):
         perturb_evaluate(run, [heldout_file.with_name("none.h5")], write=False)
 
 
-def test_cli_perturb(runs, heldout_file, tmp_path):
+def test_cli_perturb(runs, heldout_file, tmp_path, monkeypatch):
     dirs = [str(runs["lstm"]), str(runs["mlp"])]
+    # provenance records sys.argv; under CliRunner that is the test runner's, so give the
+    # command line a shell would (`python -m pytest` passed by luck, `pytest` did not)
+    monkeypatch.setattr("sys.argv", ["/usr/bin/tactile", "perturb", *dirs])
     res = runner.invoke(app, ["perturb", *dirs, "--data", str(heldout_file), "--kinds",
                               "noise,scale", "--levels", "noise=30,-20", "--levels",
                               "scale=0.5,2", "--out", str(tmp_path / "p"), "--name", "cli"])
