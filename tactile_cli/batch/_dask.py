@@ -20,8 +20,13 @@ Specs and results travel between processes, so they must pickle: paths and plain
 never open files. ``func`` must be importable by the workers (a module-level function).
 
 A task that raises an ``Exception`` is a failed :class:`TaskResult` with the exception as
-one line (:func:`one_line`); a worker that dies (out of memory, killed) fails its task the
-same way. The others go on.
+one line (:func:`one_line`); it is not run again (the same input fails the same way). A
+worker that dies in the middle of a task (out of memory, killed) is replaced by the local
+cluster's nanny and the scheduler runs the task again on a live worker, up to ``retries``
+more times (``distributed.scheduler.allowed-failures``; on an existing cluster its own
+setting holds); after that the task is a failed result saying its workers died. The others
+go on. Tasks write their outputs under a temporary name and rename them, so a task killed
+half-way leaves no output under the final name.
 
 HDF5 file locking is left on (the ``HDF5_USE_FILE_LOCKING`` variable is not touched): the
 tasks of a sweep open their inputs read-only, and HDF5 lets any number of processes hold
@@ -110,6 +115,15 @@ def one_line(exc: BaseException) -> str:
     return f"{exc.__class__.__name__}: {text}" if text else exc.__class__.__name__
 
 
+def _lost(exc: BaseException) -> str:
+    """The one line of a task that did not come back: its workers died, or it was
+    cancelled."""
+    if type(exc).__name__ == "KilledWorker":
+        return ("the worker running it died every time it ran (killed, or out of memory); "
+                "nothing was written under its output name")
+    return one_line(exc)
+
+
 def _guarded(func: Callable[[Any], Any], spec: Any) -> tuple[bool, Any, str | None, float]:
     """Run one task where it lands: (ok, value, error, seconds); an exception is caught
     here, so it never has to pickle and never stops the batch."""
@@ -144,9 +158,11 @@ def _quiet_logs() -> Iterator[None]:
 
 
 @contextmanager
-def _client(address: str | None, workers: int) -> Iterator[Any]:
+def _client(address: str | None, workers: int, retries: int = 1) -> Iterator[Any]:
     """A connected ``distributed.Client``: to ``address``, or to a LocalCluster of
-    ``workers`` single-thread processes started here; both closed on exit."""
+    ``workers`` single-thread processes started here (a task whose worker dies is run
+    again up to ``retries`` times); both closed on exit."""
+    import dask
     from distributed import Client, LocalCluster
 
     if address:
@@ -163,11 +179,12 @@ def _client(address: str | None, workers: int) -> Iterator[Any]:
         return
     # no dashboard, and the scheduler's HTTP endpoints on a free port of this host only (on
     # the default 8787 a second sweep, or any Dask user, makes distributed warn)
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           host="127.0.0.1", dashboard_address=None,
-                           scheduler_kwargs={"dashboard": False,
-                                             "dashboard_address": "127.0.0.1:0"},
-                           silence_logs=logging.ERROR)
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               host="127.0.0.1", dashboard_address=None,
+                               scheduler_kwargs={"dashboard": False,
+                                                 "dashboard_address": "127.0.0.1:0"},
+                               silence_logs=logging.ERROR)
     try:
         client = Client(cluster)
         try:
@@ -210,6 +227,7 @@ def map_tasks(
     scheduler: str | None = None,
     workers: int | None = None,
     on_progress: Callable[[BatchCounts], None] | None = None,
+    retries: int = 1,
 ) -> Iterator[TaskResult]:
     """Run ``func(spec)`` for every spec on Dask and yield a :class:`TaskResult` as each
     finishes (see the module docstring for where they run). ``keys`` name the tasks (default
@@ -217,7 +235,8 @@ def map_tasks(
 
     ``scheduler``: address of an existing cluster (default: the environment variable
     ``TACTILE_DASK_SCHEDULER``, else a local cluster); ``workers``: processes of the local
-    cluster (default: the cores; 0: run in this process, one task after another).
+    cluster (default: the cores; 0: run in this process, one task after another);
+    ``retries``: how many more times a task whose worker died runs (local cluster).
     """
     specs = list(specs)
     keys = [f"task-{i}" for i in range(len(specs))] if keys is None else list(keys)
@@ -225,6 +244,8 @@ def map_tasks(
         raise ValueError(f"`keys` ({len(keys)}) and `specs` ({len(specs)}) differ in length")
     if workers is not None and workers < 0:
         raise InputError(f"`workers` (={workers}) must be >= 0")
+    if retries < 0:
+        raise InputError(f"`retries` (={retries}) must be >= 0")
     if not specs:
         return
     address = scheduler or os.environ.get(SCHEDULER_ENV) or None
@@ -232,42 +253,54 @@ def map_tasks(
         yield from _serial(func, specs, keys, on_progress)
         return
     n = min(workers or default_workers(), len(specs))
-    with _quiet_logs(), _client(address, n) as client:
+    with _quiet_logs(), _client(address, n, retries) as client:
         from distributed import as_completed
 
         token = uuid.uuid4().hex[:8]
-        futures = {client.submit(_guarded, func, spec, key=f"tactile-{key}-{token}",
-                                 pure=False): i
-                   for i, (spec, key) in enumerate(zip(specs, keys, strict=True))}
+        queue = list(enumerate(zip(specs, keys, strict=True)))
+        futures: dict[Any, int] = {}
+        finished = as_completed()
         done = failed = 0
+
+        def fill() -> None:
+            # at most one task per worker thread in flight: the scheduler would otherwise
+            # hand a busy worker queued tasks of their own (each task its own group), and
+            # a worker that dies counts every task it holds as a failure
+            limit = max(1, sum(client.nthreads().values()))
+            while queue and len(futures) < limit:
+                i, (spec, key) = queue.pop(0)
+                fut = client.submit(_guarded, func, spec, key=f"tactile-{key}-{token}",
+                                    pure=False)
+                futures[fut] = i
+                finished.add(fut)
 
         def report() -> None:
             if on_progress is not None:
-                threads = sum(client.nthreads().values()) or 1
-                left = len(specs) - done - failed
-                on_progress(BatchCounts(len(specs), done, min(threads, left), failed))
+                on_progress(BatchCounts(len(specs), done, len(futures), failed))
 
         try:
+            fill()
             report()
-            finished = as_completed(list(futures))
             while done + failed < len(specs):
                 raise_if_requested()
                 batch = finished.next_batch(block=False)
                 if not batch:
                     time.sleep(_POLL_S)
+                    fill()
                     continue
                 for fut in batch:
-                    i = futures[fut]
+                    i = futures.pop(fut)
                     try:
                         ok, value, error, seconds = fut.result()
                     except Exception as exc:  # the worker died, or the task was cancelled
-                        ok, value, error, seconds = False, None, one_line(exc), math.nan
+                        ok, value, error, seconds = False, None, _lost(exc), math.nan
                     fut.release()
                     done, failed = done + ok, failed + (not ok)
+                    fill()
                     yield TaskResult(i, keys[i], ok, value, error, seconds)
                     report()
         finally:
-            client.cancel([f for f in futures if not f.done()])
+            client.cancel(list(futures))
 
 
 __all__ = ["SCHEDULER_ENV", "BatchCounts", "TaskResult", "default_workers", "map_tasks",
