@@ -16,6 +16,10 @@ Where the tasks run:
 - ``workers=0``: in this process, one task after another (tests and debugging; the same
   results, no cluster).
 
+At most one task per worker thread is submitted at a time (the next when one finishes),
+so a long task never waits behind another on a busy worker while a free one idles, and the
+progress counts what really runs.
+
 Specs and results travel between processes, so they must pickle: paths and plain dicts,
 never open files. ``func`` must be importable by the workers (a module-level function).
 

@@ -1,4 +1,5 @@
-"""`tactile ingest INPUT... --out FILE`"""
+"""`tactile ingest INPUT... --out FILE` and `tactile ingest INPUT... --out-dir DIR
+[--workers N] [--scheduler ADDRESS] [--json]`"""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ from typing import Annotated
 
 import typer
 
+from ..errors import InputError
 from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
 from ..store.writer import Compression
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._errors import COMMON_FLAGS, EXIT_BAD_INPUT, Flag, run_guarded, to_flags
 from .progress import RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -24,6 +26,11 @@ FLAGS: dict[str, Flag] = {
     "trial_labels": "--trial-labels",
     "frame_rate_hz": "--fps",
     "skip_unknown": "--skip-unknown",
+    "out": "--out",
+    "out_dir": "--out-dir",
+    "scheduler": "--scheduler",
+    "workers": "--workers",
+    "json": "--json",
 }
 
 
@@ -32,8 +39,16 @@ def ingest_command(
         list[Path], typer.Argument(help="Raw recordings: files or folders.", metavar="INPUT",
                                    show_default=False)
     ],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file.", metavar="FILE",
-                                      show_default=False)],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output HDF5 file (all inputs "
+                                             "into one).", metavar="FILE",
+                                             show_default=False)] = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option("--out-dir", help="Folder for one HDF5 file per input, DIR/<input "
+                     "stem>.h5, ingested on Dask; outputs newer than their inputs are skipped "
+                     "(unless --overwrite); a failed input does not stop the others (exit 2).",
+                     metavar="DIR", show_default=False),
+    ] = None,
     fmt: Annotated[
         str, typer.Option("--format", "-f", help=f"Input format: auto, {', '.join(FORMATS)}.")
     ] = "auto",
@@ -87,7 +102,23 @@ def ingest_command(
             "boxes, ...), with a note; without it such a file is refused.",
         ),
     ] = False,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
+                                            "--out-dir: ingest up-to-date inputs again).")
+                         ] = False,
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", help="--out-dir: address of an existing Dask scheduler "
+                     "(tcp://host:8786); default: $TACTILE_DASK_SCHEDULER, else a local "
+                     "cluster.", metavar="ADDRESS", show_default=False),
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", min=0, help="--out-dir: worker processes of the local "
+                     "cluster (default: the cores; 0: one input after another in this "
+                     "process).", show_default=False),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="--out-dir: print every input's "
+                                          "status as JSON.")] = False,
     compression: Annotated[
         int,
         typer.Option(
@@ -114,9 +145,20 @@ def ingest_command(
     ground truth keyed by those names. The output is written to a temporary file and renamed
     into place only when complete and valid. Assumptions the file records (a frame rate for
     folders without timestamps) are printed as notes on stderr.
+
+    With --out-dir instead of --out, each input becomes its own file DIR/<input stem>.h5,
+    ingested by Dask workers (--workers, --scheduler); outputs newer than their inputs are
+    skipped, a failed input is reported on one line while the others are written, and the
+    command exits 2 if any failed.
     """
 
     def body() -> None:
+        if (out is None) == (out_dir is None):
+            raise InputError("give `out` (one file for all inputs) or `out_dir` (one file "
+                             "per input), " + ("not both" if out is not None else "one of them"))
+        if out is not None and (scheduler is not None or workers is not None or as_json):
+            raise InputError("`scheduler`, `workers` and `json` go with `out_dir` (one file "
+                             "per input, on Dask); `out` writes one file in this process")
         options = IngestOptions(
             format=fmt,
             mapping=mapping,
@@ -129,6 +171,13 @@ def ingest_command(
             trial_labels=trial_labels,
             skip_unknown=skip_unknown,
         )
+        if out_dir is not None:
+            _ingest_each(inputs, out_dir, options=options, overwrite=overwrite,
+                         compression=Compression(None if compression < 0 else compression),
+                         scheduler=scheduler, workers=workers, as_json=as_json,
+                         progress=progress)
+            return
+        assert out is not None
         with RichProgress(enabled=progress) as bar:
             path = ingest(
                 inputs,
@@ -147,3 +196,59 @@ def ingest_command(
 def _print_note(note: str) -> None:
     """A library note as one ``tactile: note:`` line on stderr, arguments spelt as flags."""
     print(f"tactile: note: {to_flags(note, {**COMMON_FLAGS, **FLAGS})}", file=sys.stderr)
+
+
+def _ingest_each(inputs: list[Path], out_dir: Path, *, options: IngestOptions, overwrite: bool,
+                 compression: Compression, scheduler: str | None, workers: int | None,
+                 as_json: bool, progress: bool | None) -> None:
+    """``--out-dir``: one file per input on Dask, a line per finished input, a summary
+    line; exit 2 when an input failed (after the others are written)."""
+    import json
+
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..ingest.batch import IngestCounts, IngestItem, ingest_each
+
+    table = {**COMMON_FLAGS, **FLAGS}
+    console = Console(stderr=True)
+    show_bar = console.is_terminal if progress is None else progress
+    bar = Progress(TextColumn("{task.description}"), BarColumn(),
+                   TextColumn("{task.completed}/{task.total} inputs"), TimeElapsedColumn(),
+                   console=console, disable=not show_bar)
+    task = bar.add_task("ingest", total=None)
+
+    def say(line: str) -> None:
+        if show_bar:
+            bar.console.print(line, markup=False, highlight=False)
+        else:
+            print(line, file=sys.stderr, flush=True)
+
+    def on_plan(items: list[IngestItem]) -> None:
+        todo = sum(item.status == "todo" for item in items)
+        say(f"ingest: {len(items)} inputs: {todo} to ingest, {len(items) - todo} up to date "
+            "(skipped)")
+
+    def on_progress(c: IngestCounts) -> None:
+        bar.update(task, total=c.total, completed=c.done + c.failed,
+                   description=f"ingest: {c.done}/{c.total} done, {c.running} running, "
+                   f"{c.failed} failed")
+
+    def on_item(item: IngestItem) -> None:
+        if item.status == "ok":
+            say(f"{item.input}: ok -> {item.output}")
+            for note in item.notes:
+                say(f"tactile: note: {item.input}: {to_flags(note, table)}")
+        else:
+            say(f"{item.input}: failed: {to_flags(item.error or '', table)}")
+
+    with bar:
+        result = ingest_each(inputs, out_dir, options=options, overwrite=overwrite,
+                             compression=compression, scheduler=scheduler, workers=workers,
+                             on_plan=on_plan, on_progress=on_progress, on_item=on_item)
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=2))
+    else:
+        typer.echo(result.summary())
+    if not result.ok:
+        raise typer.Exit(code=EXIT_BAD_INPUT)
