@@ -1,4 +1,4 @@
-"""`tactile ingest INPUT... --out FILE` and `tactile ingest INPUT... --out-dir DIR
+"""`tactile ingest INPUT... --out FILE` and `tactile ingest INPUT... --out-dir FOLDER
 [--workers N] [--scheduler ADDRESS] [--json]`"""
 
 from __future__ import annotations
@@ -44,10 +44,10 @@ def ingest_command(
                                              show_default=False)] = None,
     out_dir: Annotated[
         Path | None,
-        typer.Option("--out-dir", help="Folder for one HDF5 file per input, DIR/<input "
+        typer.Option("--out-dir", help="Folder for one HDF5 file per input, FOLDER/<input "
                      "stem>.h5, ingested on Dask; outputs newer than their inputs are skipped "
                      "(unless --overwrite); a failed input does not stop the others (exit 2).",
-                     metavar="DIR", show_default=False),
+                     metavar="FOLDER", show_default=False),
     ] = None,
     fmt: Annotated[
         str, typer.Option("--format", "-f", help=f"Input format: auto, {', '.join(FORMATS)}.")
@@ -146,7 +146,7 @@ def ingest_command(
     into place only when complete and valid. Assumptions the file records (a frame rate for
     folders without timestamps) are printed as notes on stderr.
 
-    With --out-dir instead of --out, each input becomes its own file DIR/<input stem>.h5,
+    With --out-dir instead of --out, each input becomes its own file FOLDER/<input stem>.h5,
     ingested by Dask workers (--workers, --scheduler); outputs newer than their inputs are
     skipped, a failed input is reported on one line while the others are written, and the
     command exits 2 if any failed.
