@@ -36,7 +36,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..interrupt import raise_if_requested
-from .writer import _LIVE_TEMPORARIES
+from .writer import _LIVE_TEMPORARIES, process_alive
 
 
 def _file_ancestor(path: Path) -> Path | None:
@@ -98,14 +98,8 @@ def _remove_stale(out: Path) -> None:
     """Delete temporary siblings of ``out`` left by killed runs (their pid is gone)."""
     for tmp in out.parent.glob(f".{out.name}.*-*"):
         kind, _, pid = tmp.name.rpartition("-")
-        if not (pid.isdigit() and kind.endswith((".tmp", ".old"))):
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
+        if pid.isdigit() and kind.endswith((".tmp", ".old")) and not process_alive(int(pid)):
             _remove(tmp)
-        except PermissionError:  # alive, someone else's
-            pass
 
 
 def _make_parents(folder: Path) -> list[Path]:

@@ -85,6 +85,22 @@ def current_command() -> str:
     return " ".join(shlex.quote(a) for a in argv)
 
 
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` is running. A killed process its parent has not yet reaped (a
+    zombie, Linux ``/proc/<pid>/stat`` state Z) is dead: it writes nothing any more."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, owned by someone else
+        return True
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:  # no /proc (not Linux), or it just went
+        return True
+    return stat.rpartition(")")[2].split()[:1] != ["Z"]
+
+
 def _remove_stale_temporaries(out: Path) -> None:
     """Delete temporary files of ``out`` left by writers that were killed (SIGKILL, power loss).
 
@@ -93,14 +109,8 @@ def _remove_stale_temporaries(out: Path) -> None:
     """
     for tmp in out.parent.glob(f".{out.name}.tmp-*"):
         pid = tmp.name.rsplit("-", 1)[1]
-        if not pid.isdigit():
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
+        if pid.isdigit() and not process_alive(int(pid)):
             tmp.unlink(missing_ok=True)
-        except PermissionError:  # alive, owned by someone else
-            pass
 
 
 def sha256_of(path: str | Path, *, block: int = 1 << 22) -> str:

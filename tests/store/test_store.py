@@ -347,3 +347,23 @@ def test_trials_keep_input_order(tmp_path):
     assert [t.name for t in summarize(out).trials] == ["mat2_1", "mat10_1", "mat1_1"]
     with h5py.File(out) as h5:
         assert list(h5["trials/mat2_1/signals"]) == ["x_y"]
+
+
+def test_a_killed_writer_not_yet_reaped_counts_as_dead():
+    """A zombie (killed, its parent has not waited for it yet) writes nothing any more, so
+    its temporaries are stale: a retry on another worker must not leave them behind."""
+    import time
+
+    from tactile_cli.store.writer import process_alive
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        assert process_alive(child.pid) and process_alive(os.getpid())
+        child.kill()
+        deadline = time.monotonic() + 10
+        while process_alive(child.pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not process_alive(child.pid)  # a zombie until the wait below
+    finally:
+        child.wait()
+    assert not process_alive(child.pid)
