@@ -1,10 +1,12 @@
-"""Scaling of ``tactile ingest INPUT... --out-dir DIR`` over Dask workers (issue 18).
+"""Scaling of the batch commands over Dask workers (issue 18): ``--job ingest`` (default),
+``--job sweep`` or ``--job all``.
 
-Generates ``--inputs`` (64) image-sequence recordings (``tactile_cli.samples``: PNG frames
-and a reference frame; ``--distinct`` (4) different seeds are generated and copied to the
-other folders, since writing PNGs costs several times their ingest) and ingests them with
-``--out-dir`` three ways, each a fresh ``tactile`` process timed end to end (start-up,
-cluster start and shut-down included):
+**ingest** (``tactile ingest INPUT... --out-dir DIR``): generates ``--inputs`` (64)
+image-sequence recordings (``tactile_cli.samples``: PNG frames and a reference frame;
+``--distinct`` (4) different seeds are generated and copied to the other folders, since
+writing PNGs costs several times their ingest) and ingests them with ``--out-dir`` three
+ways, each a fresh ``tactile`` process timed end to end (start-up, cluster start and
+shut-down included):
 
 - ``--workers 0``: one input after another in the command's process (the reference
   output);
@@ -36,7 +38,16 @@ attribute, except the root attributes ``created_utc`` (when the file was written
 ``command`` (the command line, which names ``--workers`` and the output folder). Outputs
 are written under temporary names and renamed, so no temporary name reaches a file.
 
-    .venv/bin/python benchmarks/scale.py [--inputs 64] [--json]
+**sweep** (``tactile sweep``): a 16-run grid (spectrogram CNN and FNN x windows 400 and
+100 x channel sets L3R3, L3, LxRx, Lx; ``--epochs`` (4) each) trained on one simulated
+vibro-slip scene (seed 0, 2 s per recording, 0.5 s segments) and evaluated on the held-out
+segments of another (seed 1), timed the same three ways. ``identical``: every run's weights
+(``model.pt``, every tensor) and held-out metrics (every head) equal the serial run's.
+
+With ``--job all`` the JSON holds ``{"ingest": {...}, "sweep": {...}}``, each with the
+keys above; figures/scale.json (ingest) and figures/scale_sweep.json (sweep) keep them.
+
+    .venv/bin/python benchmarks/scale.py [--job ingest|sweep|all] [--inputs 64] [--json]
 """
 
 from __future__ import annotations
@@ -106,7 +117,7 @@ def generate(folder: Path, n: int, distinct: int, frames: int) -> list[Path]:
     return inputs
 
 
-def run(inputs: list[Path], out: Path, workers: int) -> tuple[float, float]:
+def run_ingest(inputs: list[Path], out: Path, workers: int) -> tuple[float, float]:
     """(wall seconds of the command, sum of the tasks' own seconds) of one fresh run."""
     shutil.rmtree(out, ignore_errors=True)
     cmd = [TACTILE, "ingest", *map(str, inputs), "--out-dir", str(out), "--workers",
@@ -120,64 +131,173 @@ def run(inputs: list[Path], out: Path, workers: int) -> tuple[float, float]:
     return seconds, sum(item["seconds"] or 0.0 for item in items)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--inputs", type=int, default=64)
-    ap.add_argument("--distinct", type=int, default=4)
-    ap.add_argument("--frames", type=int, default=60)
-    ap.add_argument("--repeats", type=int, default=2, help="runs of each; the fastest counts")
-    ap.add_argument("--json", action="store_true", help="print the results as JSON")
-    args = ap.parse_args()
+SWEEP_YAML = """version: 1
+name: scale16
+train_data: [{train}]
+eval: {{data: [{test}], split: test}}
+models:
+  cnn2d:
+    config: {root}/configs/train_cnn2d_vibro.yaml
+    by_window:
+      400: {{model.n_fft: 40, model.hop: 20}}
+      100: {{model.n_fft: 20, model.hop: 10}}
+  fnn: {{config: {root}/configs/train_fnn_vibro.yaml}}
+windows:
+  - {{window: 400, stride: 200}}
+  - {{window: 100, stride: 50}}
+channel_sets: [L3R3, L3, LxRx, Lx]
+overrides: {{optim.epochs: {epochs}, optim.patience: 0}}
+"""
 
-    with tempfile.TemporaryDirectory(prefix="tactile-scale-") as tmp:
-        folder = Path(tmp)
+
+def sweep_data(folder: Path) -> tuple[Path, Path]:
+    """Prepared vibro-slip scenes of seeds 0 (train) and 1 (test), as `make demo-accel`."""
+    from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
+    from tactile_cli.accel.prepare import prepare_file
+    from tactile_cli.ingest import IngestOptions, ingest
+
+    out = []
+    for seed in (0, 1):
+        scene = folder / f"scene{seed}"
+        simulate_vibro_slip(VibroSceneConfig.model_validate({"duration_s": 2.0}), scene,
+                            seed=seed)
+        raw = ingest([scene], folder / f"scene{seed}.h5",
+                     options=IngestOptions(format="accel-tree",
+                                           labels={"origin": "simulated",
+                                                   "dataset": f"vibro-slip seed {seed}"}))
+        out.append(prepare_file(raw, folder / f"prepared{seed}.h5", segment_s=0.5).out)
+    return out[0], out[1]
+
+
+def run_sweep(sweep: Path, out: Path, workers: int) -> tuple[float, float]:
+    """(wall seconds of the command, sum of the runs' training seconds) of one fresh sweep."""
+    shutil.rmtree(out, ignore_errors=True)
+    cmd = [TACTILE, "sweep", str(sweep), "--out", str(out), "--workers", str(workers),
+           "--no-progress", "--json"]
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        sys.exit(f"sweep workers={workers} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
+    rows = json.loads(proc.stdout)["rows"]
+    if any(r["status"] != "ok" for r in rows):
+        sys.exit(f"sweep workers={workers}: a run did not finish: {rows}")
+    return seconds, sum(r.get("train_s") or 0.0 for r in rows)
+
+
+def run_differences(a: Path, b: Path) -> list[str]:
+    """Where two sweeps' run folders differ: weights (every tensor) and metrics (heads)."""
+    import torch
+
+    out = []
+    for run in sorted(p for p in (a / "runs").iterdir() if p.is_dir()):
+        other = b / "runs" / run.name
+        wa = torch.load(run / "model.pt", weights_only=True)
+        wb = torch.load(other / "model.pt", weights_only=True)
+        if wa.keys() != wb.keys() or any(not torch.equal(wa[k], wb[k]) for k in wa):
+            out.append(f"{run.name}: weights")
+        ma = [json.loads(m.read_text())["heads"] for m in sorted(run.glob("eval/*/metrics.json"))]
+        mb = [json.loads(m.read_text())["heads"]
+              for m in sorted(other.glob("eval/*/metrics.json"))]
+        if ma != mb:
+            out.append(f"{run.name}: metrics")
+    return out
+
+
+def measure(job: str, args: argparse.Namespace, folder: Path) -> dict:
+    workers = [0, 1, 2]
+    runs: dict[int, list[tuple[float, float]]] = {w: [] for w in workers}
+    if job == "ingest":
         inputs = generate(folder, args.inputs, args.distinct, args.frames)
-        before = load()
-        workers = [0, 1, 2]
-        runs: dict[int, list[tuple[float, float]]] = {w: [] for w in workers}
-        for _ in range(args.repeats):  # interleaved, so a burst of load hits all alike
-            for w in workers:
-                runs[w].append(run(inputs, folder / f"out_w{w}", w))
-        best = {w: min(runs[w]) for w in workers}
-        seconds = [best[w][0] for w in workers]
-        task_seconds = [best[w][1] for w in workers]
-        after = load()
-        diffs: list[str] = []
-        for w in workers[1:]:
+        one_run = lambda w: run_ingest(inputs, folder / f"out_w{w}", w)  # noqa: E731
+    else:
+        train, test = sweep_data(folder)
+        sweep = folder / "scale16.yaml"
+        sweep.write_text(SWEEP_YAML.format(train=train, test=test, root=ROOT,
+                                           epochs=args.epochs))
+        one_run = lambda w: run_sweep(sweep, folder / f"sweep_w{w}", w)  # noqa: E731
+    before = load()
+    for _ in range(args.repeats):  # interleaved, so a burst of load hits all alike
+        for w in workers:
+            runs[w].append(one_run(w))
+    best = {w: min(runs[w]) for w in workers}
+    seconds = [best[w][0] for w in workers]
+    task_seconds = [best[w][1] for w in workers]
+    after = load()
+    diffs: list[str] = []
+    for w in workers[1:]:
+        if job == "ingest":
             for src in inputs:
                 name = f"{src.name}.h5"
                 diffs += [f"w{w}/{name}: {d}" for d in
                           h5_differences(folder / "out_w0" / name, folder / f"out_w{w}" / name)]
+        else:
+            diffs += [f"w{w}/{d}" for d in
+                      run_differences(folder / "sweep_w0", folder / f"sweep_w{w}")]
     one = seconds[workers.index(1)]
     speedup = [one / s for s in seconds]
     efficiency = [None if w == 0 else sp / w for w, sp in zip(workers, speedup, strict=True)]
-    result = {
-        "inputs": args.inputs, "format": f"images ({args.frames} PNG frames 320x240)",
+    what = ({"inputs": args.inputs, "format": f"images ({args.frames} PNG frames 320x240)"}
+            if job == "ingest" else
+            {"runs": 16, "grid": "cnn2d, fnn x windows 400, 100 x L3R3, L3, LxRx, Lx",
+             "epochs": args.epochs})
+    return {
+        "job": job, **what,
         "cores": len(os.sched_getaffinity(0)), "workers": workers, "seconds": seconds,
         "speedup": speedup, "efficiency": efficiency, "task_seconds": task_seconds,
         "all_seconds": {str(w): [r[0] for r in runs[w]] for w in workers}, "load_before": before,
         "load_after": after, "identical": not diffs, "differences": diffs[:20],
-        "excluded_attributes": EXCLUDED, "target_speedup_2_workers": 1.7,
+        "excluded_attributes": EXCLUDED if job == "ingest" else [],
+        "target_speedup_2_workers": 1.7,
     }
-    figures = ROOT / "benchmarks" / "figures"
-    figures.mkdir(exist_ok=True)
-    (figures / "scale.json").write_text(json.dumps(result, indent=2) + "\n")
-    if args.json:
-        print(json.dumps(result, indent=2))
-        return
-    print(f"{args.inputs} image folders, {result['cores']} cores; load before "
-          f"{before}, after {after}")
+
+
+def show(result: dict) -> None:
+    if result["job"] == "ingest":
+        print(f"ingest: {result['inputs']} image folders, {result['cores']} cores; load before "
+              f"{result['load_before']}, after {result['load_after']}")
+    else:
+        print(f"sweep: {result['runs']} runs ({result['grid']}, {result['epochs']} epochs), "
+              f"{result['cores']} cores; load before {result['load_before']}, after "
+              f"{result['load_after']}")
     print(f"{'workers':>10} {'seconds':>9} {'speedup':>8} {'efficiency':>10} "
           f"{'task s (sum)':>12}")
-    for w, s, sp, e, ts in zip(workers, seconds, speedup, efficiency, task_seconds,
-                               strict=True):
+    for w, s, sp, e, ts in zip(result["workers"], result["seconds"], result["speedup"],
+                               result["efficiency"], result["task_seconds"], strict=True):
         label = "0 (serial)" if w == 0 else str(w)
         print(f"{label:>10} {s:9.2f} {sp:8.2f} {'-' if e is None else f'{e:.2f}':>10} "
               f"{ts:12.2f}")
-    print(f"outputs identical to the serial run: {result['identical']} "
-          f"(excluded: {', '.join(EXCLUDED)})")
-    for d in diffs[:20]:
+    excluded = ", ".join(result["excluded_attributes"]) or "nothing"
+    print(f"outputs identical to the serial run: {result['identical']} (excluded: {excluded})")
+    for d in result["differences"]:
         print(f"  differs: {d}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--job", choices=["ingest", "sweep", "all"], default="ingest")
+    ap.add_argument("--inputs", type=int, default=64, help="ingest: recordings")
+    ap.add_argument("--distinct", type=int, default=4)
+    ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--epochs", type=int, default=4, help="sweep: epochs per run")
+    ap.add_argument("--repeats", type=int, default=2, help="runs of each; the fastest counts")
+    ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    args = ap.parse_args()
+
+    jobs = ["ingest", "sweep"] if args.job == "all" else [args.job]
+    results = {}
+    figures = ROOT / "benchmarks" / "figures"
+    figures.mkdir(exist_ok=True)
+    for job in jobs:
+        with tempfile.TemporaryDirectory(prefix=f"tactile-scale-{job}-") as tmp:
+            results[job] = measure(job, args, Path(tmp))
+        name = "scale.json" if job == "ingest" else "scale_sweep.json"
+        (figures / name).write_text(json.dumps(results[job], indent=2) + "\n")
+    if args.json:
+        print(json.dumps(results if len(jobs) > 1 else results[jobs[0]], indent=2))
+        return
+    for job in jobs:
+        show(results[job])
 
 
 if __name__ == "__main__":

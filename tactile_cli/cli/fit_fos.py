@@ -15,7 +15,8 @@ from rich.table import Table
 
 from ..errors import InputError
 from ..fos.compile_cache import cache_root, enable_compilation_cache
-from ._errors import Flag, run_guarded, seconds_as_ms
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
+from ._errors import COMMON_FLAGS, Flag, run_guarded, seconds_as_ms, to_flags
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -25,6 +26,7 @@ FLAGS: dict[str, Flag] = {
     "reduce": "--reduce",
     "region_label": "--region-label",
     "min_snr": "--min-snr",
+    **BATCH_FLAGS,
 }
 
 
@@ -232,6 +234,8 @@ def fit_fos_command(
         help="With --stream: fit the regions with this label (an annotation's, e.g. press; "
              "found ones are rise, fall, or pulse with --model pulse); default all.",
         show_default=False)] = None,
+    scheduler: SchedulerOption = None,
+    workers: WorkersOption = None,
     min_snr: Annotated[float | None, typer.Option(
         min=0.001, help="With --stream --regions detect/auto: a step's change over "
                         "~1.6 time constants must exceed this many times its noise; "
@@ -248,6 +252,10 @@ def fit_fos_command(
     batch, in the unit of their header or --units. The solver is traced and compiled once
     and kept in $TACTILE_CACHE_DIR (default ~/.cache/tactile; --help of --solver shows
     where), so later runs load it instead.
+
+    Several HDF5 files are fitted one task per file on Dask (--workers, --scheduler), each
+    written into its own file; a file already fitted with the same settings is skipped,
+    a failed file is named on one line while the others are fitted (exit 2).
     """
 
     def body() -> None:
@@ -288,8 +296,18 @@ def fit_fos_command(
             _report(_fit_stream(hdf5[0]))
             return
         if hdf5 and len(files) > 1:
-            raise InputError("fit-fos takes one HDF5 file per call; several inputs must all "
-                             "be CSV curves", path=hdf5[0])
+            # an unreadable file among tactile files is one of them: its task says why
+            curves = [f for f in files if f.is_dir() or f.suffix.lower() == ".csv"]
+            if curves:
+                other = curves[0]
+                raise InputError("several inputs must all be tactile HDF5 files (fitted one "
+                                 "task per file) or all CSV curves (fitted together)",
+                                 path=other)
+            _fit_many(files)
+            return
+        if scheduler is not None or workers is not None:
+            raise InputError("--scheduler and --workers go with several HDF5 files (one "
+                             "task per file)", path=files[0])
         if hdf5:
             file = hdf5[0]
             for flag, value in (("--model", model), ("--units", units)):
@@ -335,6 +353,39 @@ def fit_fos_command(
                 "p0": None if opts.p0 is None else dict(opts.p0), "order": order,
                 "criterion": "bic", "units": units, "stream": stream, "channels": channels,
                 "reduce": reduce.value, "region_label": region_label}
+
+    def _fit_many(paths: list[Path]) -> None:
+        from ..fos.batch import fit_each
+        from ._batch import FileBatchPrinter, finish_batch
+
+        for flag, value in (("--model", model), ("--units", units), ("--csv", csv_out),
+                            ("--plot", plot), ("--no-write", no_write or None)):
+            if value is not None:
+                raise InputError(f"{flag} goes with one HDF5 file; several files are fitted "
+                                 "one task per file, each written into its file",
+                                 path=paths[0])
+
+        def describe(item: Any) -> str:
+            parts = []
+            for region, s in item.value["summary"].items():
+                median = s["median_pearson_r"]
+                parts.append(f"{region} {s['n_converged']}/{s['n_trials']} converged"
+                             + ("" if median is None else f" (median R {median:.4f})"))
+            return "; ".join(parts)
+
+        wanted = ["press", "slip"] if (kind or Kind.both) == Kind.both else [kind.value]
+        printer = FileBatchPrinter("fit-fos", progress=None, todo="to fit",
+                                   describe=describe,
+                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+        with printer.running():
+            result = fit_each(
+                paths, regions=wanted, region_source=(regions or Regions.auto).value,
+                bin_s=None if bin_ms is None else bin_ms / 1000,
+                press_duration_s=press_duration, order=order, options=options(),
+                overwrite=overwrite, config=config(), records=as_json,
+                scheduler=scheduler, workers=workers, on_plan=printer.on_plan,
+                on_progress=printer.on_progress, on_item=printer.on_item)
+        finish_batch(result, as_json=as_json)
 
     def _fit_h5(path: Path) -> dict[str, Any]:
         from ..fos.fit_file import fit_fos_file

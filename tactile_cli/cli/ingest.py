@@ -12,7 +12,8 @@ import typer
 from ..errors import InputError
 from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
 from ..store.writer import Compression
-from ._errors import COMMON_FLAGS, EXIT_BAD_INPUT, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, scheduler_option, workers_option
+from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
 from .progress import RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -28,10 +29,11 @@ FLAGS: dict[str, Flag] = {
     "skip_unknown": "--skip-unknown",
     "out": "--out",
     "out_dir": "--out-dir",
-    "scheduler": "--scheduler",
-    "workers": "--workers",
+    **BATCH_FLAGS,
     "json": "--json",
 }
+OutDirScheduler = scheduler_option("--out-dir: ")
+OutDirWorkers = workers_option("--out-dir: ")
 
 
 def ingest_command(
@@ -105,18 +107,8 @@ def ingest_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
                                             "--out-dir: ingest up-to-date inputs again).")
                          ] = False,
-    scheduler: Annotated[
-        str | None,
-        typer.Option("--scheduler", help="--out-dir: address of an existing Dask scheduler "
-                     "(tcp://host:8786); default: $TACTILE_DASK_SCHEDULER, else a local "
-                     "cluster.", metavar="ADDRESS", show_default=False),
-    ] = None,
-    workers: Annotated[
-        int | None,
-        typer.Option("--workers", min=0, help="--out-dir: worker processes of the local "
-                     "cluster (default: the cores; 0: one input after another in this "
-                     "process).", show_default=False),
-    ] = None,
+    scheduler: OutDirScheduler = None,
+    workers: OutDirWorkers = None,
     as_json: Annotated[bool, typer.Option("--json", help="--out-dir: print every input's "
                                           "status as JSON.")] = False,
     compression: Annotated[
@@ -203,52 +195,15 @@ def _ingest_each(inputs: list[Path], out_dir: Path, *, options: IngestOptions, o
                  as_json: bool, progress: bool | None) -> None:
     """``--out-dir``: one file per input on Dask, a line per finished input, a summary
     line; exit 2 when an input failed (after the others are written)."""
-    import json
-
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from ..ingest.batch import IngestCounts, IngestItem, ingest_each
+    from ..ingest.batch import ingest_each
+    from ._batch import FileBatchPrinter, finish_batch
 
     table = {**COMMON_FLAGS, **FLAGS}
-    console = Console(stderr=True)
-    show_bar = console.is_terminal if progress is None else progress
-    bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                   TextColumn("{task.completed}/{task.total} inputs"), TimeElapsedColumn(),
-                   console=console, disable=not show_bar)
-    task = bar.add_task("ingest", total=None)
-
-    def say(line: str) -> None:
-        if show_bar:
-            bar.console.print(line, markup=False, highlight=False)
-        else:
-            print(line, file=sys.stderr, flush=True)
-
-    def on_plan(items: list[IngestItem]) -> None:
-        todo = sum(item.status == "todo" for item in items)
-        say(f"ingest: {len(items)} inputs: {todo} to ingest, {len(items) - todo} up to date "
-            "(skipped)")
-
-    def on_progress(c: IngestCounts) -> None:
-        bar.update(task, total=c.total, completed=c.done + c.failed,
-                   description=f"ingest: {c.done}/{c.total} done, {c.running} running, "
-                   f"{c.failed} failed")
-
-    def on_item(item: IngestItem) -> None:
-        if item.status == "ok":
-            say(f"{item.input}: ok -> {item.output}")
-            for note in item.notes:
-                say(f"tactile: note: {item.input}: {to_flags(note, table)}")
-        else:
-            say(f"{item.input}: failed: {to_flags(item.error or '', table)}")
-
-    with bar:
+    printer = FileBatchPrinter("ingest", progress=progress, todo="to ingest",
+                               flags=lambda text: to_flags(text, table))
+    with printer.running():
         result = ingest_each(inputs, out_dir, options=options, overwrite=overwrite,
                              compression=compression, scheduler=scheduler, workers=workers,
-                             on_plan=on_plan, on_progress=on_progress, on_item=on_item)
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
-    else:
-        typer.echo(result.summary())
-    if not result.ok:
-        raise typer.Exit(code=EXIT_BAD_INPUT)
+                             on_plan=printer.on_plan, on_progress=printer.on_progress,
+                             on_item=printer.on_item)
+    finish_batch(result, as_json=as_json)

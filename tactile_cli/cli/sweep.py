@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from ._batch import BATCH_FLAGS, scheduler_option, workers_option
 from ._errors import Flag, run_guarded
 
 if TYPE_CHECKING:
@@ -18,9 +19,10 @@ if TYPE_CHECKING:
 FLAGS: dict[str, Flag] = {
     "train_data": "--data",
     "eval_data": "--eval-data",
-    "scheduler": "--scheduler",
-    "workers": "--workers",
+    **BATCH_FLAGS,
 }
+SweepScheduler = scheduler_option("")
+SweepWorkers = workers_option("", unit="run")
 
 
 def sweep_command(
@@ -43,18 +45,8 @@ def sweep_command(
                      "eval.data. Repeat the option for several.", show_default=False,
                      metavar="FILE"),
     ] = None,
-    scheduler: Annotated[
-        str | None,
-        typer.Option("--scheduler", help="Address of an existing Dask scheduler "
-                     "(tcp://host:8786) to send the runs to; default: $TACTILE_DASK_SCHEDULER, "
-                     "else a local cluster.", metavar="ADDRESS", show_default=False),
-    ] = None,
-    workers: Annotated[
-        int | None,
-        typer.Option("--workers", min=0, help="Worker processes of the local cluster "
-                     "(default: the cores; 0: one run after another in this process).",
-                     show_default=False),
-    ] = None,
+    scheduler: SweepScheduler = None,
+    workers: SweepWorkers = None,
     overwrite: Annotated[bool, typer.Option(help="Run every run again, and write into a "
                                             "folder that holds no sweep.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print sweep_results as JSON.")

@@ -14,82 +14,27 @@ failed item with its one-line error; the others go on.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
+from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
 from ..config_file import missing_file_error
 from ..errors import InputError
 from ..store.writer import DEFAULT_COMPRESSION, Compression, current_command
 from . import IngestOptions, ingest
 
-Status = Literal["todo", "skipped", "ok", "failed"]
-
-
-@dataclass
-class IngestItem:
-    """One input of a batch: its ``output``, ``status`` (``todo`` while planned, then
-    ``ok``, ``skipped`` or ``failed``), ``error`` (one line), task ``seconds`` and the
-    notes of its ingest."""
-
-    input: str
-    output: str
-    status: Status = "todo"
-    error: str | None = None
-    seconds: float | None = None
-    notes: list[str] = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class IngestCounts:
-    """Progress of the inputs to ingest: ``done`` (ok), ``running``, ``failed`` of
-    ``total``; ``skipped``: outputs already up to date (not in ``total``)."""
-
-    total: int
-    done: int
-    running: int
-    failed: int
-    skipped: int
-
-
-@dataclass
-class IngestBatchResult:
-    """Every input's item, in the order given."""
-
-    out_dir: str
-    items: list[IngestItem]
-
-    def count(self, status: Status) -> int:
-        return sum(item.status == status for item in self.items)
-
-    @property
-    def ok(self) -> bool:
-        return self.count("failed") == 0
-
-    def summary(self) -> str:
-        return (f"ingest: {len(self.items)} inputs: {self.count('ok')} ok, "
-                f"{self.count('skipped')} skipped (up to date), {self.count('failed')} failed")
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"out_dir": self.out_dir,
-                "counts": {s: self.count(s) for s in ("ok", "skipped", "failed")},
-                "items": [{**asdict(item), "seconds": None if item.seconds is None
-                           or item.seconds != item.seconds else item.seconds}
-                          for item in self.items]}
+#: One input of a batch and its output (see :class:`tactile_cli.batch.FileItem`).
+IngestItem = FileItem
+#: Progress counts of a batch (see :class:`tactile_cli.batch.FileCounts`).
+IngestCounts = FileCounts
+#: Every input's item (see :class:`tactile_cli.batch.FileBatchResult`).
+IngestBatchResult = FileBatchResult
 
 
 def output_name(path: Path) -> str:
     """``rec.aedat4`` -> ``rec.h5``; a folder ``press_01/`` -> ``press_01.h5``."""
     return f"{path.name if path.is_dir() else path.stem}.h5"
-
-
-def newest_mtime(path: Path) -> float:
-    """The modification time of a file, or the newest of a folder and everything in it."""
-    newest = path.stat().st_mtime
-    if path.is_dir():
-        for sub in path.rglob("*"):
-            newest = max(newest, sub.stat().st_mtime)
-    return newest
 
 
 def plan(inputs: Sequence[str | Path], out_dir: str | Path, *,
@@ -168,8 +113,6 @@ def ingest_each(
     ``workers=0``: one after another in this process). ``on_plan`` gets the items once
     planned, ``on_progress`` the counts, ``on_item`` each item as its task finishes.
     """
-    from ..batch import map_tasks
-
     options = options or IngestOptions()
     if options.annotations is not None or options.trial_labels is not None:
         raise InputError("`annotations` and `trial_labels` name the trials of one output "
@@ -177,36 +120,17 @@ def ingest_each(
     items = plan(inputs, out_dir, options=options, overwrite=overwrite)
     if on_plan is not None:
         on_plan(items)
-    todo = [item for item in items if item.status == "todo"]
-    skipped = len(items) - len(todo)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     base = {k: (None if v is None else str(v)) if k in ("mapping", "annotations",
                                                          "trial_labels") else v
             for k, v in asdict(options).items()}
     command = command if command is not None else current_command()
-    specs = [{"input": item.input, "output": item.output, "options": base,
-              "compression": compression.level, "command": command} for item in todo]
-
-    def progress(c: Any) -> None:
-        if on_progress is not None:
-            on_progress(IngestCounts(c.total, c.done, c.running, c.failed, skipped))
-
-    if not todo and on_progress is not None:
-        on_progress(IngestCounts(0, 0, 0, 0, skipped))
-    for res in map_tasks(ingest_task, specs, keys=[Path(i.output).stem for i in todo],
-                         scheduler=scheduler, workers=workers, on_progress=progress):
-        item = todo[res.index]
-        item.seconds = res.seconds
-        if res.ok:
-            item.status, item.notes = "ok", list(res.value["notes"])
-        else:
-            error = res.error or "failed"
-            name = Path(item.input).name
-            item.status = "failed"
-            item.error = error if name in error else f"{item.input}: {error}"
-        if on_item is not None:
-            on_item(item)
-    return IngestBatchResult(str(out_dir), items)
+    return run_each(ingest_task, items,
+                    lambda item: {"input": item.input, "output": item.output,
+                                  "options": base, "compression": compression.level,
+                                  "command": command},
+                    verb="ingest", out_dir=str(out_dir), scheduler=scheduler,
+                    workers=workers, on_progress=on_progress, on_item=on_item)
 
 
 __all__ = ["IngestBatchResult", "IngestCounts", "IngestItem", "ingest_each", "ingest_task",

@@ -1,0 +1,91 @@
+"""``tactile accel-prepare FILE... --out-dir FOLDER``: many accel-tree files prepared on Dask.
+
+:func:`prepare_each` plans one task per input file, written to ``<out_dir>/<input
+stem>.h5``, skips outputs newer than their input (``overwrite``: none skipped), and runs
+the rest through :func:`tactile_cli.batch.run_each` (a local cluster of ``workers``
+processes, an existing one at ``scheduler``, or this process with ``workers=0``). Each task
+is :func:`prepare_task`, which calls :func:`~tactile_cli.accel.prepare.prepare_file` in its
+worker: the store's writer makes every output atomic (temporary file, then rename), so a
+stopped batch started again does only what is missing. A failed file never stops the
+others.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
+from ..config_file import missing_file_error
+from ..errors import InputError
+from ..store.writer import current_command
+
+
+def prepare_task(spec: dict[str, Any]) -> dict[str, Any]:
+    """One task of :func:`prepare_each` (module level, so Dask workers import it): spec
+    ``{"input", "output", "segment_s", "cutoff_hz", "command"}``; returns the
+    :class:`~tactile_cli.accel.prepare.PrepareResult` as a dict."""
+    from .prepare import prepare_file
+
+    result = prepare_file(spec["input"], spec["output"], segment_s=spec["segment_s"],
+                          cutoff_hz=spec["cutoff_hz"], overwrite=True,
+                          command=spec["command"])
+    return result.as_dict()
+
+
+def prepare_each(
+    inputs: Sequence[str | Path],
+    out_dir: str | Path,
+    *,
+    segment_s: float = 2.0,
+    cutoff_hz: float | None = None,
+    overwrite: bool = False,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    command: str | None = None,
+    on_plan: Callable[[list[FileItem]], None] | None = None,
+    on_progress: Callable[[FileCounts], None] | None = None,
+    on_item: Callable[[FileItem], None] | None = None,
+) -> FileBatchResult:
+    """Prepare each input into ``<out_dir>/<input stem>.h5`` (see the module docstring);
+    never raises for a failed input. Refused before any work: a bad ``segment_s`` or
+    ``cutoff_hz``, a missing input, two inputs of one stem, an output that is a folder."""
+    if not segment_s > 0:
+        raise InputError(f"`segment_s` (={segment_s}) must be positive")
+    if cutoff_hz is not None and not cutoff_hz > 0:
+        raise InputError(f"`cutoff_hz` (={cutoff_hz}) must be positive")
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise InputError("no input files given")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("`out_dir` is a file, not a folder", path=out)
+    seen: dict[str, Path] = {}
+    items = []
+    for path in paths:
+        if not path.exists():
+            raise missing_file_error(path)
+        target = out / f"{path.stem}.h5"
+        if target.name in seen:
+            raise InputError(f"inputs {str(seen[target.name])!r} and {str(path)!r} would both "
+                             f"be written to {target.name!r} in `out_dir`; rename one")
+        seen[target.name] = path
+        if target.is_dir():
+            raise InputError("output is a folder; remove or rename it", path=target)
+        fresh = (not overwrite and target.is_file()
+                 and target.stat().st_mtime > newest_mtime(path))
+        items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
+    if on_plan is not None:
+        on_plan(items)
+    out.mkdir(parents=True, exist_ok=True)
+    command = command if command is not None else current_command()
+    return run_each(prepare_task, items,
+                    lambda item: {"input": item.input, "output": item.output,
+                                  "segment_s": segment_s, "cutoff_hz": cutoff_hz,
+                                  "command": command},
+                    verb="accel-prepare", out_dir=str(out), scheduler=scheduler,
+                    workers=workers, on_progress=on_progress, on_item=on_item)
+
+
+__all__ = ["prepare_each", "prepare_task"]
