@@ -7,6 +7,7 @@
 #                             outputs that are up to date are skipped
 #   make sweep-vibro          paper 001's grid (3 models x 6 windows x 8 channel sets) on Dask
 #   make bench                run the benchmarks in benchmarks/ (figures: benchmarks/RESULTS.md)
+#   make bench-scale          batch commands at 1 and 2 Dask workers (issue 18; ~15 min)
 #   make fuzz                 every command on the seeded corpus of damaged inputs (issue 20):
 #                             counts per outcome class (`make test` runs a fast subset)
 
@@ -16,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long demo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
+.PHONY: sweep-vibro bench-long bench-scale demo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -153,6 +154,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/ingest.py
 	$(BIN)/python benchmarks/fit_fos.py
 	$(BIN)/python benchmarks/fuzzy.py
+	$(BIN)/python benchmarks/export.py
 
 # Damaged and hostile inputs (issue 20): truncated, byte-flipped, retyped and absurd inputs of
 # every kind, each run through the commands that take it; prints the counts per outcome
@@ -169,6 +171,12 @@ bench-long: $(STAMP)
 	$(BIN)/python benchmarks/grade_stability.py
 	$(BIN)/python benchmarks/xela_loto.py
 	$(BIN)/python benchmarks/spatial_classifier.py
+
+# Scale-out on Dask (issue 18): 64 ingests and a 16-run sweep at 0 (serial), 1 and 2 local
+# workers, outputs checked equal to the serial run; about 15 min on 2 idle cores (run it on
+# an otherwise quiet machine: other load skews the ratios). Writes benchmarks/figures/scale*.json.
+bench-scale: $(STAMP)
+	$(BIN)/python benchmarks/scale.py --job all
 
 # Paper 001's full grid (issue 14, items 4 and 9): 3 models x 6 windows x 8 channel sets
 # (configs/sweep_vibro.yaml; 128 runs, 16 n/a) on Dask, each trained on a simulated scene

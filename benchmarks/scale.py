@@ -39,7 +39,8 @@ attribute, except the root attributes ``created_utc`` (when the file was written
 are written under temporary names and renamed, so no temporary name reaches a file.
 
 **sweep** (``tactile sweep``): a 16-run grid (spectrogram CNN and FNN x windows 400 and
-100 x channel sets L3R3, L3, LxRx, Lx; ``--epochs`` (4) each) trained on one simulated
+100 x channel sets L3R3, L3, LxRx, Lx; ``--epochs`` (5) each with early-stopping patience
+3, the settings of the full grid in configs/sweep_vibro.yaml) trained on one simulated
 vibro-slip scene (seed 0, 2 s per recording, 0.5 s segments) and evaluated on the held-out
 segments of another (seed 1), timed the same three ways. ``identical``: every run's weights
 (``model.pt``, every tensor) and held-out metrics (every head) equal the serial run's.
@@ -146,7 +147,7 @@ windows:
   - {{window: 400, stride: 200}}
   - {{window: 100, stride: 50}}
 channel_sets: [L3R3, L3, LxRx, Lx]
-overrides: {{optim.epochs: {epochs}, optim.patience: 0}}
+overrides: {{optim.epochs: {epochs}, optim.patience: 3}}
 """
 
 
@@ -279,7 +280,8 @@ def main() -> None:
     ap.add_argument("--inputs", type=int, default=64, help="ingest: recordings")
     ap.add_argument("--distinct", type=int, default=4)
     ap.add_argument("--frames", type=int, default=60)
-    ap.add_argument("--epochs", type=int, default=4, help="sweep: epochs per run")
+    ap.add_argument("--epochs", type=int, default=5,
+                    help="sweep: epochs per run (patience 3, as configs/sweep_vibro.yaml)")
     ap.add_argument("--repeats", type=int, default=2, help="runs of each; the fastest counts")
     ap.add_argument("--json", action="store_true", help="print the results as JSON")
     args = ap.parse_args()

@@ -53,6 +53,7 @@ _VERBS = {
     "train": "learn.train",
     "evaluate": "learn.evaluate",
     "compare": "learn.compare",
+    "export_run": "learn.export",
     "perturb_evaluate": "learn.perturb",
     "build_report": "learn.report",
     "quicklook": "plots.quicklook",

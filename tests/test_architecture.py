@@ -20,6 +20,7 @@ FOUNDATIONS = {"errors", "progress", "interrupt", "config_file", "vocabulary", "
 METHODS = {"learn", "fos", "grade", "spectral"}
 #: Third-party packages that one package alone may import, and that package.
 OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
+          "onnx": {"learn"}, "onnxruntime": {"learn"}, "onnxscript": {"learn"},
           "jax": {"fos"}, "optimistix": {"fos"}, "dask": {"batch"}, "distributed": {"batch"}}
 
 

@@ -23,6 +23,7 @@ from . import centroids as _centroids
 from . import compare as _compare
 from . import detect_delay as _detect_delay
 from . import evaluate as _evaluate
+from . import export as _export
 from . import fit_fos as _fit_fos
 from . import frames as _frames
 from . import grade as _grade
@@ -163,6 +164,8 @@ app.command("evaluate", context_settings=_MANY_FILES,
     _evaluate.evaluate_command
 )
 
+app.command("export", help="A trained run as one ONNX or TorchScript file with its "
+            "preprocessing inside, and a JSON sidecar.")(_export.export_command)
 app.command("compare", help="Accuracy against latency of several runs, Pareto front and the "
             "model the scene needs.")(_compare.compare_command)
 app.command("perturb", context_settings=_MANY_FILES,

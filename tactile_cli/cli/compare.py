@@ -131,10 +131,12 @@ def _table(cmp: Comparison) -> Table:
     from ..learn.compare import distinct_run_paths, table_rows
 
     rows = table_rows(cmp)
+    exported = any(row["exported_latency_ms"] is not None for row in rows)
     table = Table(title=f"{cmp.metric_label} against cost on {cmp.data_name}")
     table.add_column("run", overflow="fold")
     table.add_column("family")
     for col in (f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms", "p95 ms",
+                *(("exported ms",) if exported else ()),
                 "windows/s", "parameters", "MB", "Pareto", "in margin", ""):
         table.add_column(col, justify="right")
     for row, name in zip(rows, distinct_run_paths([row["run"] for row in rows]), strict=True):
@@ -143,6 +145,8 @@ def _table(cmp: Comparison) -> Table:
             name, row["family"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
             "" if lat is None else f"{lat:.3f}",
             "" if row["latency_ms_p95"] is None else f"{row['latency_ms_p95']:.3f}",
+            *(("" if row["exported_latency_ms"] is None
+               else f"{row['exported_latency_ms']:.3f}",) if exported else ()),
             "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
             f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
             "*" if row["pareto"] else "", "*" if row["within_margin"] else "",

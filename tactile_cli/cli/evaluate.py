@@ -5,15 +5,17 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from ..errors import InputError
-from ._errors import Flag, run_guarded
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
+from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
 
 if TYPE_CHECKING:
     from rich.console import Console
+    from rich.table import Table
 
     from ..learn.evaluate import EvalResult
 from .train import data_files
@@ -25,6 +27,8 @@ FLAGS: dict[str, Flag] = {
     "threshold": "--threshold",
     "overwrite": "--overwrite",
     "name": "--name",
+    "exported": "--exported FILE",
+    **BATCH_FLAGS,
 }
 
 
@@ -57,6 +61,15 @@ def evaluate_command(
     overwrite: Annotated[
         bool, typer.Option(help="Replace an existing RUN/eval/<name> folder.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
+    each: Annotated[
+        bool, typer.Option("--each", help="Evaluate on each --data file apart, into "
+                           "RUN/eval/<file stem>, one task per file on Dask (--workers, "
+                           "--scheduler); evaluations newer than their file and the model "
+                           "are skipped; no latency (tasks side by side would time each "
+                           "other).")
+    ] = False,
+    scheduler: SchedulerOption = None,
+    workers: WorkersOption = None,
     perturb: Annotated[
         bool, typer.Option("--perturb", help="Also re-evaluate on perturbed copies of the data "
                            "(see `tactile perturb`); results in RUN/perturb/<name>/.")
@@ -69,6 +82,13 @@ def evaluate_command(
         str, typer.Option(help="--perturb breaking point: accuracy below a factor of the clean "
                           "accuracy (0.9x) or an accuracy (0.95 or 95%).")
     ] = "0.9x",
+    exported: Annotated[
+        Path | None,
+        typer.Option("--exported", help="A file `tactile export` wrote from this run: its "
+                     "outputs are checked against the run's on the same windows and its "
+                     "batch-1 latency (onnxruntime or TorchScript) is measured beside torch's.",
+                     metavar="FILE", show_default=False),
+    ] = None,
 ) -> None:
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
@@ -77,7 +97,6 @@ def evaluate_command(
 
     def body() -> None:
         from rich.console import Console
-        from rich.table import Table
 
         from ..learn.evaluate import evaluate
         from ..learn.runs import dumps, read_run_info
@@ -91,12 +110,18 @@ def evaluate_command(
                              "(RUN/folds/fold_00) instead of the cross-validated run")
         if split not in ("all", "test"):
             raise InputError(f"--split must be all or test, got {split!r}")
+        if each:
+            _evaluate_each(run, files)
+            return
+        if scheduler is not None or workers is not None:
+            raise InputError("--scheduler and --workers go with --each (one task per file)")
         if perturb:
             from .perturb import parse_threshold
 
             parse_threshold(threshold)  # a bad value fails before any work
         result = evaluate(run, files, split=split, name=name,  # type: ignore[arg-type]
-                          latency=latency, threads=threads, overwrite=overwrite)
+                          latency=latency, threads=threads, overwrite=overwrite,
+                          exported=exported)
         if as_json:
             payload = result.as_dict()
             if perturb:
@@ -110,17 +135,7 @@ def evaluate_command(
         else:
             console = Console(width=None if sys.stdout.isatty() else 120)
             print_metrics(console, result)
-            cost = Table(title="Cost on this machine")
-            for col in ("parameters", "size (MB)", "batch-1 median (ms)", "batch-1 p95 (ms)",
-                        "windows/s", "threads"):
-                cost.add_column(col, justify="right")
-            lat = result.latency
-            cost.add_row(f"{result.n_params:,}", f"{result.size_mb:.3f}",
-                         "" if lat is None else f"{lat.batch1_ms_median:.3f}",
-                         "" if lat is None else f"{lat.batch1_ms_p95:.3f}",
-                         "" if lat is None else f"{lat.windows_per_s:,.0f}",
-                         "" if lat is None else str(lat.threads))
-            console.print(cost)
+            console.print(cost_table(result))
             console.print(f"wrote {result.out_dir}")
             if perturb:
                 from .perturb import perturb_and_print
@@ -134,7 +149,72 @@ def evaluate_command(
                   "this run; these metrics include training trials (use --split test)",
                   file=sys.stderr)
 
+    def _evaluate_each(run: Path, files: list[Path]) -> None:
+        from ..learn.evaluate_each import NO_LATENCY, evaluate_each
+        from ._batch import FileBatchPrinter, finish_batch
+
+        if not files:
+            raise InputError("--each needs --data FILE...: the files to evaluate on apart")
+        for flag, value in (("--name", name), ("--perturb", perturb or None),
+                            ("--exported", exported)):
+            if value is not None:
+                raise InputError(f"{flag} goes with one evaluation; --each names each "
+                                 "results folder after its data file")
+
+        def describe(item: Any) -> str:
+            parts = []
+            for head, m in item.value["summary"]["heads"].items():
+                parts.append(f"{head} MAE {m['mae']:.4g}" if "mae" in m
+                             else f"{head} {_pct(m['accuracy'])}")
+            return f"-> {item.output} ({', '.join(parts)})"
+
+        printer = FileBatchPrinter("evaluate", describe=describe, todo="to evaluate",
+                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+        with printer.running():
+            result = evaluate_each(run, files, split=split,  # type: ignore[arg-type]
+                                   overwrite=overwrite, scheduler=scheduler, workers=workers,
+                                   on_plan=printer.on_plan, on_progress=printer.on_progress,
+                                   on_item=printer.on_item)
+        if not as_json:
+            print(f"tactile: note: {NO_LATENCY}", file=sys.stderr)
+        finish_batch(result, as_json=as_json, payload={"note": NO_LATENCY})
+
     run_guarded(body, flags=FLAGS)
+
+
+def cost_table(result: EvalResult) -> Table:
+    """Parameters, size, batch-1 latency and throughput; with an exported model a row of
+    its own (runtime, latency, largest output difference from the run's)."""
+    from rich.table import Table
+
+    exp = result.extra.get("exported")
+    cost = Table(title="Cost on this machine")
+    cols = ("parameters", "size (MB)", "batch-1 median (ms)", "batch-1 p95 (ms)", "windows/s",
+            "threads")
+    for col in (("runtime",) if exp else ()) + cols:
+        cost.add_column(col, justify="left" if col == "runtime" else "right")
+    lat = result.latency
+    row = [f"{result.n_params:,}", f"{result.size_mb:.3f}",
+           "" if lat is None else f"{lat.batch1_ms_median:.3f}",
+           "" if lat is None else f"{lat.batch1_ms_p95:.3f}",
+           "" if lat is None else f"{lat.windows_per_s:,.0f}",
+           "" if lat is None else str(lat.threads)]
+    if not exp:
+        cost.add_row(*row)
+        return cost
+    cost.add_row("torch", *row)
+    elat = exp.get("latency") or {}
+    ratio = ""
+    if lat is not None and elat.get("batch1_ms_median"):
+        ratio = f"; batch-1 latency {elat['batch1_ms_median'] / lat.batch1_ms_median:.2f}x torch's"
+    size = Path(exp["file"]).stat().st_size / 1e6 if Path(exp["file"]).exists() else None
+    cost.add_row(f"{exp['runtime']}: {Path(exp['file']).name}", "",
+                 "" if size is None else f"{size:.3f}",
+                 f"{elat['batch1_ms_median']:.3f}" if elat else "",
+                 f"{elat['batch1_ms_p95']:.3f}" if elat else "", "", str(exp["threads"]))
+    cost.caption = (f"exported model: largest output difference from the run's "
+                    f"{exp['max_abs_diff']:.2g} over {exp['n_windows']:,} windows{ratio}")
+    return cost
 
 
 def _pct(value: float | None) -> str:

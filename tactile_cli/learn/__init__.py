@@ -3,7 +3,8 @@
 Issue 4, items 1-4 (and the latency part of 8): windows of any tactile HDF5 stream
 (:mod:`.data`), five network families with multi-task heads and paper 001's eq.-3 loss
 (:mod:`.models`), ``tactile train`` (:mod:`.train`, run folders: :mod:`.runs`) and
-``tactile evaluate`` (:mod:`.evaluate`, latency: :mod:`.latency`). First applied to the
+``tactile evaluate`` (:mod:`.evaluate`, latency: :mod:`.latency`); ``tactile export``
+(:mod:`.export`: a run as one ONNX or TorchScript file). First applied to the
 temporal LSTM action classifier of paper 000 (sec. 5, Table I).
 
 Importing this package imports torch; the CLI imports it only inside the commands.
@@ -26,6 +27,9 @@ from .evaluate import EvalResult as EvalResult
 from .evaluate import RegressionMetrics as RegressionMetrics
 from .evaluate import classification_metrics as classification_metrics
 from .evaluate import evaluate as evaluate
+from .export import DeployedModel as DeployedModel
+from .export import ExportedModel as ExportedModel
+from .export import export_run as export_run
 from .heads import HeadSpec as HeadSpec
 from .latency import LatencyStats as LatencyStats
 from .latency import measure_latency as measure_latency

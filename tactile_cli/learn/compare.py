@@ -169,6 +169,10 @@ class RunPoint:
     head_kinds: dict[str, str] = field(default_factory=dict)
     meets_targets: bool | None = None
     """Whether every target of the comparison is met (None: no targets)."""
+    exported_latency_ms: float | None = None
+    """Batch-1 median latency (ms) of the run's exported model (``tactile evaluate
+    --exported``) where measured: the deployed cost beside torch's ``latency_ms``."""
+    exported_runtime: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -407,6 +411,9 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
     lat = m.get("latency") or {}
     model = m.get("model") or {}
     values, kinds = _head_values(m)
+    exported = m.get("exported") if isinstance(m.get("exported"), dict) else {}
+    exported_lat = exported.get("latency") if isinstance(exported.get("latency"), dict) else {}
+    exported_ms = exported_lat.get("batch1_ms_median")
     return RunPoint(
         run=str(run_dir), label=label or f"{m.get('family', '?')}/{run_dir.name}",
         family=str(m.get("family", "?")), eval_name=data_name, metrics_path=str(path),
@@ -420,6 +427,9 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
         latency_threads=lat.get("threads"), cpu=str(lat.get("cpu", "")),
         input=m.get("input"), score_ci95=_score_ci(m, metric),
         head_values=values, head_kinds=kinds,
+        exported_latency_ms=float(exported_ms) if isinstance(exported_ms, int | float)
+        and not isinstance(exported_ms, bool) else None,
+        exported_runtime=str(exported.get("runtime", "")),
     )
 
 
@@ -565,7 +575,7 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
 TABLE_COLUMNS = ("label", "family", "score_pct", "delta_pp", "accuracy_pct", "macro_f1",
                  "latency_ms_median", "latency_ms_p95", "windows_per_s", "n_params",
                  "size_mb", "pareto", "within_margin", "needed", "fastest", "meets_targets",
-                 "run")
+                 "run", "exported_latency_ms")
 
 
 def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
@@ -582,6 +592,7 @@ def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
             "n_params": p.n_params, "size_mb": p.size_mb, "pareto": p.pareto,
             "within_margin": p.within_margin, "needed": p is cmp.needed,
             "fastest": p is cmp.fastest, "meets_targets": p.meets_targets, "run": p.run,
+            "exported_latency_ms": p.exported_latency_ms,
         })
     return rows
 
@@ -591,8 +602,9 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
     axis), every run labelled ``family/name``, the Pareto front as a dashed staircase with
     ringed points, the margin band under the best score, the needed model starred and
     the fastest within the margin as a diamond; a run whose evaluation has a 95 % interval
-    of the score (cross-validated runs) gets it as a vertical error bar. Runs without
-    latency are listed below."""
+    of the score (cross-validated runs) gets it as a vertical error bar; a run evaluated
+    with its exported model (``--exported``) gets a hollow square at that model's latency,
+    joined to its torch point. Runs without latency are listed below."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -614,6 +626,16 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
                                 yerr=[[max(0.0, 100 * p.score - lo)],
                                       [max(0.0, hi - 100 * p.score)]],
                                 color=colour[fam], alpha=0.6, zorder=2.5)
+    deployed = [p for p in timed if p.exported_latency_ms and p.exported_latency_ms > 0]
+    for i, p in enumerate(deployed):
+        ax.plot([p.latency_ms, p.exported_latency_ms], [100 * p.score] * 2, color="0.5",
+                lw=0.8, ls=":", zorder=2)
+        ax.scatter([p.exported_latency_ms], [100 * p.score], marker="s", s=46,
+                   facecolors="none", edgecolors=colour[p.family], lw=1.4, zorder=3,
+                   label="exported model (onnxruntime / TorchScript)" if i == 0 else None)
+        ax.annotate(f"{p.label} (exported)", (p.exported_latency_ms, 100 * p.score),
+                    xytext=(6, -11), textcoords="offset points", fontsize=7, color="0.3",
+                    zorder=6)
     if cmp.pareto:
         xs = [p.latency_ms for p in cmp.pareto]
         ys = [100 * p.score for p in cmp.pareto]
@@ -641,8 +663,8 @@ def plot_comparison(cmp: Comparison, *, title: str | None = None) -> bytes:
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.xaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if
                                                    f"{v:.1e}"[0] in "25" else ""))
-        lo = min(p.latency_ms for p in timed)
-        hi = max(p.latency_ms for p in timed)
+        xs_all = [p.latency_ms for p in timed] + [p.exported_latency_ms for p in deployed]
+        lo, hi = min(xs_all), max(xs_all)
         ax.set_xlim(lo / 1.6, hi * 2.2)  # room for the labels on the right
     ys_all = [100 * p.score for p in cmp.points] + [
         100 * v for p in timed if p.score_ci95 is not None for v in p.score_ci95]

@@ -494,11 +494,14 @@ class WindowSet:
 def center_scale(windows: np.ndarray) -> np.ndarray:
     """(k, w, c) windows -> (k, w, c) float32 with each channel of each window centred on
     its mean and divided by its largest absolute deviation, so that it spans [-1, 1]
-    (paper 001, sec. 4); a channel constant over its window becomes all zeros."""
+    (paper 001, sec. 4); a channel constant over its window becomes all zeros (tested on
+    its range: the float32 mean of equal values can differ from them by a rounding step,
+    and that step divided by itself would give +-1)."""
     x = np.asarray(windows, dtype=np.float32)
+    varies = x.max(axis=1, keepdims=True) > x.min(axis=1, keepdims=True)
     x = x - x.mean(axis=1, keepdims=True)
     peak = np.abs(x).max(axis=1, keepdims=True)
-    return np.divide(x, peak, out=np.zeros_like(x), where=peak > 0)
+    return np.divide(x, peak, out=np.zeros_like(x), where=varies & (peak > 0))
 
 
 def window_ends(n_samples: int, data: DataConfig) -> np.ndarray:

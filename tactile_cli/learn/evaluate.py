@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from ..errors import InputError
 from ..store.origin import data_origin
@@ -62,6 +62,7 @@ def evaluate(
     threads: int | None = None,
     command: str | None = None,
     overwrite: bool = False,
+    exported: str | Path | None = None,
 ) -> EvalResult:
     """Evaluate a run on data files and write ``RUN/eval/<name>/`` (an existing evaluation
     of that name is an error unless ``overwrite``; the folder is written atomically).
@@ -74,9 +75,16 @@ def evaluate(
     (``tactile train --cv``) is evaluated fold by fold on its held-out trials
     (:func:`tactile_cli.learn.cv.evaluate_cv`); ``data_paths`` may then be None (the
     run's own data).
+
+    ``exported``: a file ``tactile export`` wrote from this run; its outputs on the same
+    windows are compared with the run's and its batch-1 latency (onnxruntime or TorchScript)
+    is measured beside torch's (metrics.json key ``exported``, :func:`.export.check_exported`).
     """
     info = runs.read_run_info(Path(run_dir))
     if info.get("cv") is not None:
+        if exported is not None:
+            raise InputError("`exported` needs one model: give a fold's folder "
+                             "(RUN/folds/fold_00) of the cross-validated run", path=run_dir)
         return evaluate_cv(run_dir, data_paths, name=name, latency=latency, threads=threads,
                            command=command, overwrite=overwrite, split=split)
     if not data_paths:
@@ -107,6 +115,12 @@ def evaluate(
     metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
                                     cfg.data.boundary_margin)
     lat = measure_latency_of(model, ws, threads) if latency else None
+    extra: dict[str, Any] = {}
+    if exported is not None:
+        from .export import check_exported, raw_windows
+
+        extra["exported"] = check_exported(exported, run, model, ws, raw_windows(trials, run),
+                                           latency=latency, threads=threads)
     result = EvalResult(
         run=str(run.path), family=cfg.model.family, name=name, split=split,
         data=data_records(paths, trials), overlaps_training=overlaps(paths, run.info),
@@ -115,7 +129,7 @@ def evaluate(
         file_size_bytes=(run.path / runs.MODEL_PT).stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, run.input), notes=notes,
-        origin=data_origin(paths),
+        origin=data_origin(paths), extra=extra,
     )
     write_eval(result, run.heads, ws, decoded, run.normalisation.targets, overwrite=overwrite)
     return result

@@ -217,7 +217,8 @@ def test_several_inputs_errors(tmp_path, h5copy):
     result = runner.invoke(app, ["fit-fos", str(a), str(b), "--model", "pulse"])
     assert result.exit_code == 2 and "two curves are named 'x'" in result.stderr
     result = runner.invoke(app, ["fit-fos", str(h5copy), str(a)])
-    assert result.exit_code == 2 and "several inputs must all be tactile HDF5 files" in result.stderr
+    assert result.exit_code == 2
+    assert "several inputs must all be tactile HDF5 files" in result.stderr
     result = runner.invoke(app, ["fit-fos", str(h5copy), "--units", "N"])
     assert result.exit_code == 2 and "--units applies to CSV curves" in result.stderr
 

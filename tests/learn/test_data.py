@@ -200,3 +200,14 @@ def test_event_trials_are_counted_on_the_fly_with_labels_from_annotations(event_
         assert t.classes["action"] == ("approach", "press", "slip", "release")
     with pytest.raises(InputError, match="channel 'sum' is not an event-count channel"):
         read_trials([path], tiny_config(data={"channels": ["sum"]}).data)
+
+
+def test_center_scale_zeroes_a_constant_channel_whatever_its_value():
+    from tactile_cli.learn.data import center_scale
+
+    # the float32 mean of 20 copies of 2.7182817 is off by a rounding step, which divided by
+    # itself used to give a window of +-1 instead of zeros
+    x = np.full((1, 20, 2), 2.7182817, np.float32)
+    x[0, :, 1] = np.linspace(0, 1, 20)
+    y = center_scale(x)
+    assert (y[0, :, 0] == 0).all() and np.abs(y[0, :, 1]).max() == pytest.approx(1.0)
