@@ -91,17 +91,21 @@ demo-events: $(STAMP)
 # spatial-temporal LSTM on the same trials' ROI centroid trajectories; all tested on a second
 # simulated scene (seed 1: scene_test) that was used for nothing else (no fit, no synth, no
 # training), so the report's simulated accuracies are on recordings the models never saw.
-# Then compared by accuracy and cost, and perturbed. Needs demo-events first.
+# Each model is exported to ONNX (demo_out/exported/) and evaluated with the exported file
+# checked against it and timed beside PyTorch. Then compared by accuracy and cost (torch and
+# exported latency), and perturbed. Needs demo-events first.
 DEMO_FAMILIES := lstm cnn1d fnn mlp
 DEMO_RUNS := $(foreach m,$(DEMO_FAMILIES),$(DEMO)/runs/$(m)) $(DEMO)/runs/lstm_spatial
 demo-learn: $(STAMP)
-	rm -rf $(DEMO)/runs $(DEMO)/scene_test
+	rm -rf $(DEMO)/runs $(DEMO)/scene_test $(DEMO)/exported
+	mkdir -p $(DEMO)/exported
 	$(TACTILE) simulate marker-events --out $(DEMO)/scene_test --groups $(SCENE_GROUPS) --seed 1 --no-progress
 	$(TACTILE) ingest $(DEMO)/scene_test/*.npy --width 640 --height 480 --annotations $(DEMO)/scene_test/annotations.csv --trial-labels $(DEMO)/scene_test/trials.csv --out $(DEMO)/h5/scene_test.h5 --overwrite --no-progress
 	$(TACTILE) centroids $(DEMO)/h5/scene_test.h5 --rois $(DEMO)/scene_test/scene.json --out $(DEMO)/h5/scene_test_centroids.h5 --overwrite --no-progress
 	for m in $(DEMO_FAMILIES); do \
 	  $(TACTILE) train configs/train_$${m}_actions.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/$$m --no-progress || exit 1; \
-	  $(TACTILE) evaluate $(DEMO)/runs/$$m --data $(DEMO)/h5/scene_test.h5 || exit 1; \
+	  $(TACTILE) export $(DEMO)/runs/$$m --out $(DEMO)/exported/$$m.onnx --overwrite || exit 1; \
+	  $(TACTILE) evaluate $(DEMO)/runs/$$m --data $(DEMO)/h5/scene_test.h5 --exported $(DEMO)/exported/$$m.onnx || exit 1; \
 	done
 	$(TACTILE) train configs/train_lstm_spatial.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/lstm_spatial --no-progress
 	$(TACTILE) evaluate $(DEMO)/runs/lstm_spatial --data $(DEMO)/h5/scene_test_centroids.h5 --name scene_test
