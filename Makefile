@@ -17,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long bench-scale demo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
+.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -65,6 +65,8 @@ demo: $(STAMP)
 	$(MAKE) --no-print-directory demo-learn DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-real DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-accel DEMO=$(DEMO)
+	$(MAKE) --no-print-directory demo-vibro DEMO=$(DEMO)
+	$(MAKE) --no-print-directory demo-taxel DEMO=$(DEMO)
 	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
 	$(MAKE) --no-print-directory demo-report DEMO=$(DEMO)
 
@@ -147,6 +149,35 @@ demo-accel: $(STAMP)
 	$(TACTILE) train configs/train_cnn2d_vibro.yaml --data $(DEMO)/accel/prepared0.h5 --out $(DEMO)/runs_accel/cnn2d --epochs 3 --no-progress
 	$(TACTILE) evaluate $(DEMO)/runs_accel/cnn2d --data $(DEMO)/accel/prepared1.h5 --name vibro_seed1
 	$(TACTILE) detect-delay $(DEMO)/runs_accel/cnn2d --data $(DEMO)/accel/prepared1.h5
+
+# The active-vibration chain of paper 003, small (about 30 s): the lumped model's spectra
+# without and with contact (like Fig. 3A), a simulated VibroTouch scene (3 gripper-object
+# and 1 human-touch trial, seed 0), the vibration and force triggers scored against the
+# truth with a figure like Fig. 5 and the band-finder, and the same detector following one
+# trial's samples as a live stream with its per-update latency. The full study is in
+# benchmarks/RESULTS.md ("VibroTouch").
+demo-vibro: $(STAMP)
+	rm -rf $(DEMO)/vibro
+	mkdir -p $(DEMO)/vibro
+	$(TACTILE) vibro-model configs/vibro_model.yaml --plot $(DEMO)/vibro/model_spectra.png
+	$(TACTILE) simulate vibrotouch --out $(DEMO)/vibro/scene.h5 --contact-trials 3 --touch-trials 1 --seed 0 --no-progress
+	$(TACTILE) validate $(DEMO)/vibro/scene.h5
+	$(TACTILE) detect-contact $(DEMO)/vibro/scene.h5 --plot $(DEMO)/vibro/detections.png --find-band
+	$(TACTILE) detect-contact $(DEMO)/vibro/scene.h5 --trial contact_00 --samples-out $(DEMO)/vibro/contact_00.txt
+	$(TACTILE) detect-contact - --follow < $(DEMO)/vibro/contact_00.txt
+
+# The taxel-array chain of paper 004, small (well under a minute): a simulated PVDF scene
+# (12 object/hand and 12 object/world trials, seed 0), the slip interface classified with
+# both features (Gamma, single- and multi-finger G2) by 10-fold CV with the nested band
+# search and a figure like Fig. 12, and the features as a stream for `tactile train`. The
+# full study is in benchmarks/RESULTS.md ("Taxel arrays").
+demo-taxel: $(STAMP)
+	rm -rf $(DEMO)/taxel
+	mkdir -p $(DEMO)/taxel
+	$(TACTILE) simulate taxel-slip --out $(DEMO)/taxel/scene.h5 --preset pvdf --trials 12 --seed 0 --no-progress
+	$(TACTILE) validate $(DEMO)/taxel/scene.h5
+	$(TACTILE) slip-interface $(DEMO)/taxel/scene.h5 --plot $(DEMO)/taxel/features.png --out $(DEMO)/taxel/slip_interface.json --no-progress
+	$(TACTILE) features spectral $(DEMO)/taxel/scene.h5 --out $(DEMO)/taxel/features.h5 --no-progress
 
 # The report: the real-data runs (when there are any) and the simulated ones, every data
 # file, and the figure folders (quick looks of every file, the event chain's figures).

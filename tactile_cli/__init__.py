@@ -47,6 +47,15 @@ _VERBS = {
     "simulate_vibro_slip": "accel.simulate",
     "prepare_file": "accel.prepare",
     "detection_delay": "accel.delay",
+    # the active-vibration chain (paper 003)
+    "simulate_vibrotouch": "vibro.simulate",
+    "model_spectra": "vibro.model",
+    "detect_contacts": "vibro.pipeline",
+    "find_band": "vibro.pipeline",
+    # the taxel-array chain (paper 004)
+    "simulate_taxel_slip": "taxel.simulate",
+    "slip_interface": "taxel.pipeline",
+    "write_feature_stream": "taxel.pipeline",
     # methods any stream enters
     "fit_fos_file": "fos.fit_file",
     "grade_trials": "grade.grading",

@@ -21,9 +21,11 @@ from . import accel_prepare as _accel_prepare
 from . import accumulate as _accumulate
 from . import centroids as _centroids
 from . import compare as _compare
+from . import detect_contact as _detect_contact
 from . import detect_delay as _detect_delay
 from . import evaluate as _evaluate
 from . import export as _export
+from . import features as _features
 from . import fit_fos as _fit_fos
 from . import frames as _frames
 from . import grade as _grade
@@ -34,11 +36,13 @@ from . import plot as _plot
 from . import report as _report
 from . import samples as _samples
 from . import simulate as _simulate
+from . import slip_interface as _slip_interface
 from . import slip_rate as _slip_rate
 from . import sweep as _sweep
 from . import synth as _synth
 from . import train as _train
 from . import validate as _validate
+from . import vibro_model as _vibro_model
 
 #: Columns of ``--help`` when stdout is not a terminal (a pipe, a file, a test) and neither
 #: ``COLUMNS`` nor ``TERMINAL_WIDTH`` is set: rich would use 80 and cut long paths and
@@ -153,6 +157,11 @@ app.command("grade", help="Grade the pressing force of every trial (fuzzy, Table
     _grade.grade_command
 )
 app.add_typer(_simulate.app, name="simulate")
+app.add_typer(_features.app, name="features")
+app.command("slip-interface", help="Object/hand or object/world slip from taxel arrays: "
+            "naive Bayes on power ratio and group coherence, nested CV (paper 004).")(
+    _slip_interface.slip_interface_command
+)
 
 _MANY_FILES = {"allow_extra_args": True}  # `--data a.h5 b.h5` (a shell glob after --data)
 app.command("train", context_settings=_MANY_FILES,
@@ -177,6 +186,12 @@ app.command("accel-prepare", help="Accelerometer recordings as segments with a s
 app.command("detect-delay", context_settings=_MANY_FILES,
             help="Samples and inference time a run needs to detect slippage (paper 001).")(
     _detect_delay.detect_delay_command
+)
+app.command("vibro-model", help="Resonances of the lumped finger-gripper-object model "
+            "without and with contact (paper 003).")(_vibro_model.vibro_model_command)
+app.command("detect-contact", help="Contact and touch detection from active vibration and "
+            "force, offline or on a live stream (paper 003).")(
+    _detect_contact.detect_contact_command
 )
 app.command("sweep", help="Train and evaluate a grid of model x window x channel set on "
             "Dask: one table, Fig. 8 and the speed-accuracy chart.")(_sweep.sweep_command)

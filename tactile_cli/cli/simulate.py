@@ -176,3 +176,149 @@ def vibro_slip_command(
                    f"all, simulated in {summary['elapsed_s']:.1f} s")
 
     run_guarded(body, flags=FLAGS)
+
+
+@app.command("vibrotouch")
+def vibrotouch_command(
+    out: Annotated[
+        Path, typer.Option("--out", "-o", help="Output tactile HDF5 file.", show_default=False,
+                           metavar="FILE")
+    ],
+    config: Annotated[
+        Path | None,
+        typer.Option("--config", "-c", help="Scene config YAML (see "
+                     "configs/scene_vibrotouch.yaml); default: the built-in defaults.",
+                     metavar="CONFIG"),
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every sample.")] = 0,
+    contact_trials: Annotated[
+        int | None, typer.Option("--contact-trials", min=0,
+                                 help="Override contact_trials (gripper-object trials).")
+    ] = None,
+    touch_trials: Annotated[
+        int | None, typer.Option("--touch-trials", min=0,
+                                 help="Override touch_trials (trials of 5 human touches).")
+    ] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress",
+                     help="Show a progress bar (default: when stderr is a terminal).",
+                     show_default=False),
+    ] = None,
+) -> None:
+    """Simulate paper 003's VibroTouch bench: an ERM near 130 Hz in one fingertip, an
+    accelerometer (2.5 kHz) in the other, a force sensor (1 kHz); the gripper closes on an
+    object at 0.01 mm/s (contact trials) or holds it at 1 N while a human presses it
+    (touch trials). The accelerometer hears the lumped model of `tactile vibro-model`.
+
+    Writes one tactile HDF5 file: streams accel (a_x, g) and force (f_y, f_z, N), trial
+    labels origin=simulated, dataset, scenario, contact_s (the true contact), annotations
+    calibration, contact and touch. Then: tactile detect-contact FILE.
+    """
+
+    def body() -> None:
+        from ..vibro import SceneConfig, load_scene_config, simulate_vibrotouch
+
+        cfg = load_scene_config(config) if config is not None else SceneConfig()
+        if contact_trials is not None or touch_trials is not None:
+            update = {k: v for k, v in (("contact_trials", contact_trials),
+                                        ("touch_trials", touch_trials)) if v is not None}
+            try:
+                cfg = SceneConfig.model_validate({**cfg.model_dump(), **update})
+            except ValueError as exc:
+                raise InputError(str(exc).splitlines()[-1].strip()) from None
+        with RichProgress(enabled=progress) as bar:
+            result = simulate_vibrotouch(cfg, out, seed=seed, progress=bar,
+                                         overwrite=overwrite,
+                                         sources=[config] if config is not None else ())
+        summary = result.as_dict()
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+            return
+        scen = [t["scenario"] for t in summary["trials"]]
+        typer.echo(f"vibrotouch -> {result.out} (seed {result.seed}): "
+                   f"{scen.count('contact')} contact and {scen.count('touch')} touch trials, "
+                   f"{summary['duration_s']:.1f} s in all, simulated in "
+                   f"{summary['elapsed_s']:.1f} s")
+
+    run_guarded(body, flags=FLAGS)
+
+
+@app.command("taxel-slip")
+def taxel_slip_command(
+    out: Annotated[
+        Path, typer.Option("--out", "-o", help="Output tactile HDF5 file.", show_default=False,
+                           metavar="FILE")
+    ],
+    config: Annotated[
+        Path | None,
+        typer.Option("--config", "-c", help="Scene config YAML (see "
+                     "configs/scene_taxel_slip.yaml); default: the built-in defaults.",
+                     metavar="CONFIG"),
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every sample.")] = 0,
+    preset: Annotated[
+        list[str] | None,
+        typer.Option("--preset", help="Simulate only this sensor (biotac, capacitive, pvdf); "
+                     "repeatable. Default: the config's presets.", metavar="INPUT"),
+    ] = None,
+    trials: Annotated[
+        int | None, typer.Option("--trials", min=1, help="Override trials_per_class (trials "
+                                 "per preset and slip type).")
+    ] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress",
+                     help="Show a progress bar (default: when stderr is a terminal).",
+                     show_default=False),
+    ] = None,
+) -> None:
+    """Simulate paper 004's slip experiments: object/hand slip (independent stick-slip at
+    every contact) and object/world slip (one source through each taxel's linear path) on
+    a BioTac-like array (19 electrodes at 100 Hz, sequential, plus 4.4 kHz pressure), a
+    capacitive array (12 taxels at 300 Hz, sequential) and PVDF strips (8 at 3.125 kHz,
+    simultaneous), two fingers each, textures, grip forces and speeds varying by trial.
+
+    Writes one tactile HDF5 file: streams <preset>_f0, <preset>_f1 (and biotac_pressure),
+    trial labels origin=simulated, dataset, preset, slip (hand/world), texture, grip_n,
+    speed_cm_s, annotations rest and slip. Then: tactile slip-interface FILE.
+    """
+
+    def body() -> None:
+        from ..taxel import SceneConfig, load_scene_config, simulate_taxel_slip
+
+        cfg = load_scene_config(config) if config is not None else SceneConfig()
+        update: dict[str, object] = {}
+        if preset:
+            from ..taxel.config import PRESET_NAMES
+
+            unknown = [p for p in preset if p not in PRESET_NAMES]
+            if unknown:
+                raise InputError(f"--preset {unknown[0]!r} is not one of "
+                                 f"{', '.join(PRESET_NAMES)}")
+            update["presets"] = tuple(dict.fromkeys(preset))
+        if trials is not None:
+            update["trials_per_class"] = trials
+        if update:
+            try:
+                cfg = SceneConfig.model_validate({**cfg.model_dump(), **update})
+            except ValueError as exc:
+                raise InputError(str(exc).splitlines()[1].strip()) from None
+        with RichProgress(enabled=progress) as bar:
+            result = simulate_taxel_slip(cfg, out, seed=seed, progress=bar,
+                                         overwrite=overwrite)
+        summary = result.as_dict()
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+            return
+        typer.echo(f"taxel-slip -> {result.out} (seed {result.seed}): "
+                   f"{summary['n_trials']} trials ("
+                   + ", ".join(f"{p} {c['hand']}+{c['world']}" for p, c in
+                               result.counts.items())
+                   + f" hand+world), simulated in {summary['elapsed_s']:.1f} s")
+
+    run_guarded(body, flags=FLAGS)

@@ -1,5 +1,7 @@
 """Spectral methods any multichannel stream can enter: STFT settings and spectrograms,
-Welch band power, spectral centroid and the anti-alias resampling of bandwidth studies.
+Welch band power, spectral centroid and the anti-alias resampling of bandwidth studies;
+sliding spectra with band tracking (peak amplitude and frequency in a band, offline or as
+samples arrive), first needed by the active-vibration chain of paper 003.
 
 Arrays in, arrays out (numpy and scipy only); first needed by the accelerometer
 fingertips of paper 001 (:mod:`tactile_cli.accel`).
@@ -8,12 +10,34 @@ fingertips of paper 001 (:mod:`tactile_cli.accel`).
 from ._band_power import band_power as band_power
 from ._band_power import spectral_centroid as spectral_centroid
 from ._band_power import welch_psd as welch_psd
+from ._coherence import band_sums as band_sums
+from ._coherence import coherence_matrix as coherence_matrix
+from ._coherence import cross_spectral_matrix as cross_spectral_matrix
+from ._coherence import g2_noise_floor as g2_noise_floor
+from ._coherence import group_square_coherence as group_square_coherence
+from ._coherence import group_square_coherence_bins as group_square_coherence_bins
+from ._coherence import group_square_coherence_windows as group_square_coherence_windows
+from ._coherence import local_ensemble_power as local_ensemble_power
+from ._coherence import power_ratio as power_ratio
+from ._coherence import segment_spectra as segment_spectra
+from ._coherence import welch_segment_count as welch_segment_count
 from ._resample import bandwidth_steps as bandwidth_steps
 from ._resample import limit_bandwidth as limit_bandwidth
 from ._stft import STFT_LENGTHS as STFT_LENGTHS
 from ._stft import spectrogram as spectrogram
 from ._stft import stft_hop as stft_hop
 from ._stft import stft_lengths as stft_lengths
+from ._tracking import FrameSettings as FrameSettings
+from ._tracking import FrameSpectra as FrameSpectra
+from ._tracking import SpectrumTracker as SpectrumTracker
+from ._tracking import band_peak as band_peak
+from ._tracking import frame_spectra as frame_spectra
+from ._tracking import moving_average as moving_average
 
-__all__ = ["STFT_LENGTHS", "band_power", "bandwidth_steps", "limit_bandwidth",
+__all__ = ["STFT_LENGTHS", "FrameSettings", "FrameSpectra", "SpectrumTracker", "band_peak",
+           "frame_spectra", "moving_average", "band_power", "bandwidth_steps", "limit_bandwidth",
            "spectral_centroid", "spectrogram", "stft_hop", "stft_lengths", "welch_psd"]
+__all__ += ["band_sums", "coherence_matrix", "cross_spectral_matrix", "g2_noise_floor",
+            "group_square_coherence", "group_square_coherence_bins",
+            "group_square_coherence_windows", "local_ensemble_power",
+            "power_ratio", "segment_spectra", "welch_segment_count"]  # paper 004

@@ -1,0 +1,21 @@
+"""The taxel-array chain of paper 004: where did it slip? Object/hand against object/world
+slip from dynamic taxel arrays, with the power ratio Gamma and the group square coherence
+G2 (computed by :mod:`tactile_cli.spectral`).
+
+- :func:`simulate_taxel_slip`: the scene with ground truth (``tactile simulate taxel-slip``);
+- :func:`slip_interface`: naive-Bayes classification with nested best-band search
+  (``tactile slip-interface``);
+- :func:`write_feature_stream`: Gamma and G2 per window as a stream for ``tactile train``
+  (``tactile features spectral``).
+"""
+
+from .config import FeatureConfig as FeatureConfig
+from .config import SceneConfig as SceneConfig
+from .config import load_feature_config as load_feature_config
+from .config import load_scene_config as load_scene_config
+from .pipeline import slip_interface as slip_interface
+from .pipeline import write_feature_stream as write_feature_stream
+from .simulate import simulate_taxel_slip as simulate_taxel_slip
+
+__all__ = ["FeatureConfig", "SceneConfig", "load_feature_config", "load_scene_config",
+           "simulate_taxel_slip", "slip_interface", "write_feature_stream"]

@@ -1,0 +1,537 @@
+"""File-level verbs of the taxel-array chain (paper 004): read the trials of a
+``tactile simulate taxel-slip`` file (or any file laid out the same way), compute the
+slip-interface features and classify the slip interface.
+
+- :func:`read_preset_trials`: one preset's trials as arrays (rest and slip segments);
+- :func:`preset_features`: Gamma, single- and multi-finger G2 of every trial in every band
+  of the best-band search and over the full spectrum, with contact estimation and the
+  noise-floor gate;
+- :func:`slip_interface`: Gaussian naive Bayes with ``folds``-fold cross-validation per
+  trial (stratified by slip type): full spectrum, best band chosen inside each training
+  set (nested; the headline) and best band chosen on all trials (optimistic);
+- :func:`write_feature_stream`: Gamma and G2 per window and named band as a signal stream
+  ``spectral_features`` that ``tactile train`` reads.
+
+Folds are dealt per trial, seeded and independent of file order, like
+:mod:`tactile_cli.learn.splits` (not imported: importing ``learn`` imports torch).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..progress import NullProgress, Progress
+from ..store.trials import TactileFile, Trial
+from ..store.writer import StoreWriter
+from .config import SLIP_TYPES, FeatureConfig, WelchConfig
+from .features import (
+    above_noise_floor,
+    array_features,
+    band_centre_width_hz,
+    band_grid,
+    contact_taxels,
+    finger_ensembles,
+    multi_finger_g2,
+)
+from .simulate import REST, SLIP, pressure_stream, taxel_stream
+
+FEATURES = ("gamma", "g2_single", "g2_multi")
+FEATURE_STREAM = "spectral_features"
+
+
+@dataclass(frozen=True)
+class PresetTrials:
+    """One preset's trials: ``rest``/``slip`` per finger (T, n, N) taxel samples,
+    ``pressure`` (T, n_p, fingers) slip-segment pressure or None, ``slip_type`` (T,)."""
+
+    preset: str
+    names: tuple[str, ...]
+    slip_type: np.ndarray
+    rest: list[np.ndarray]
+    slip: list[np.ndarray]
+    rate_hz: float
+    delays_s: np.ndarray | None
+    pressure: np.ndarray | None
+    pressure_rate_hz: float | None
+
+
+def file_presets(tf: TactileFile) -> list[str]:
+    """The presets (trial label ``preset``) of the file's trials, in first-seen order."""
+    seen: dict[str, None] = {}
+    for trial in tf.trials():
+        p = trial.labels.get("preset")
+        if p is not None and trial.has_signal(taxel_stream(str(p), 0)):
+            seen[str(p)] = None
+    if not seen:
+        raise InputError("no taxel-array trials (trial label preset with streams "
+                         "<preset>_f0, <preset>_f1, as tactile simulate taxel-slip writes)",
+                         path=tf.path)
+    return list(seen)
+
+
+def _segment(trial: Trial, label: str) -> tuple[float, float]:
+    ann = trial.annotation(label)
+    if ann is None:
+        raise InputError(f"trial {trial.name!r} has no {label!r} annotation", path=trial.path)
+    return ann.start_s, ann.end_s
+
+
+def _delays(tf: TactileFile, stream: str, n: int) -> np.ndarray | None:
+    attrs = tf.sensor(stream).attrs
+    if attrs.get("sampling") != "sequential":
+        return None
+    return float(attrs.get("channel_delay_first_s", 0.0)) + \
+        np.arange(n) * float(attrs.get("channel_delay_step_s", 0.0))
+
+
+def read_preset_trials(tf: TactileFile, preset: str) -> PresetTrials:
+    """Every trial of ``preset`` with a ``slip`` label, cut into its ``rest`` and ``slip``
+    segments (the slip segments cut to the shortest)."""
+    trials = [t for t in tf.trials() if str(t.labels.get("preset")) == preset]
+    if not trials:
+        raise InputError(f"no trials of preset {preset!r}", path=tf.path)
+    fingers = 0
+    while trials[0].has_signal(taxel_stream(preset, fingers)):
+        fingers += 1
+    rest: list[list[np.ndarray]] = [[] for _ in range(fingers)]
+    slip: list[list[np.ndarray]] = [[] for _ in range(fingers)]
+    pressure: list[np.ndarray] = []
+    has_pressure = trials[0].has_signal(pressure_stream(preset))
+    rate = p_rate = None
+    for trial in trials:
+        r0, r1 = _segment(trial, REST)
+        s0, s1 = _segment(trial, SLIP)
+        for k in range(fingers):
+            sig = trial.signal(taxel_stream(preset, k))
+            rate = sig.sample_rate_hz
+            rest[k].append(sig.data[(sig.t_s >= r0) & (sig.t_s < r1)].astype(np.float64))
+            slip[k].append(sig.data[(sig.t_s >= s0) & (sig.t_s < s1)].astype(np.float64))
+        if has_pressure:
+            sig = trial.signal(pressure_stream(preset))
+            p_rate = sig.sample_rate_hz
+            pressure.append(sig.data[(sig.t_s >= s0) & (sig.t_s < s1)].astype(np.float64))
+
+    def stack(parts: list[np.ndarray]) -> np.ndarray:
+        n = min(len(p) for p in parts)
+        return np.stack([p[:n] for p in parts])
+
+    labels = np.array([str(t.labels.get("slip", "")) for t in trials])
+    n_taxels = slip[0][0].shape[1]
+    return PresetTrials(preset, tuple(t.name for t in trials), labels,
+                        [stack(r) for r in rest], [stack(s) for s in slip], float(rate),
+                        _delays(tf, taxel_stream(preset, 0), n_taxels),
+                        stack(pressure) if has_pressure else None, p_rate)
+
+
+@dataclass(frozen=True)
+class FeatureValues:
+    """One feature of every trial: ``values`` (T, n_bands) in the search bands, ``full``
+    (T,) over the full spectrum; the bands' (f, w) in Hz; ``n_averages`` (n_bands,)
+    segment-bin products per band and ``n_channels`` compared (rank deficient where
+    n_averages < n_channels)."""
+
+    values: np.ndarray
+    full: np.ndarray
+    f_hz: np.ndarray
+    w_hz: np.ndarray
+    n_averages: np.ndarray
+    n_channels: int
+
+
+@dataclass(frozen=True)
+class PresetFeatures:
+    preset: str
+    slip_type: np.ndarray
+    decided: np.ndarray
+    """(T,) bool: above the noise floor (the gate)."""
+    contact_counts: np.ndarray
+    """(T, fingers) taxels estimated in contact."""
+    features: dict[str, FeatureValues]
+
+
+def _welch(fcfg: FeatureConfig, preset: str) -> WelchConfig:
+    return fcfg.welch.get(preset) or fcfg.welch.get("biotac") or WelchConfig(nperseg=64)
+
+
+def preset_features(pt: PresetTrials, fcfg: FeatureConfig) -> PresetFeatures:
+    """Gamma, single-finger and multi-finger G2 of every trial of ``pt``."""
+    wc = _welch(fcfg, pt.preset)
+    nperseg = min(wc.nperseg, pt.slip[0].shape[1])
+    n_bins = nperseg // 2 + 1
+    lo, hi = band_grid(n_bins, wc.max_band_bins)
+    lo_all, hi_all = np.append(lo, 1), np.append(hi, n_bins - 1)   # last: full spectrum
+    delays = pt.delays_s if fcfg.sequential_correction else None
+    feats, contacts = [], []
+    for rest, slip in zip(pt.rest, pt.slip, strict=True):
+        contact = contact_taxels(rest, slip, fcfg.contact_threshold) \
+            if fcfg.contact_estimation else np.ones(slip.shape[::2], dtype=bool)
+        contacts.append(contact)
+        feats.append(array_features(slip, pt.rate_hz, lo_all, hi_all, nperseg=nperseg,
+                                    noverlap=wc.noverlap(nperseg),
+                                    delays_s=delays, contact=contact))
+    decided = np.any([above_noise_floor(r, s, fcfg.gate_ratio)
+                      for r, s in zip(pt.rest, pt.slip, strict=True)], axis=0)
+    f_hz = feats[0].f_hz
+    fc, fw = band_centre_width_hz(f_hz, lo, hi)
+    n_avg = feats[0].n_averages
+    n_taxels = int(max(c.sum(axis=-1).max() for c in contacts))
+    out: dict[str, FeatureValues] = {}
+    for name, attr in (("gamma", "gamma"), ("g2_single", "g2")):
+        v = np.nanmean(np.stack([getattr(f, attr) for f in feats]), axis=0)
+        out[name] = FeatureValues(v[:, :-1], v[:, -1], fc, fw, n_avg[:-1], n_taxels)
+    if pt.pressure is not None:
+        p_seg = min(wc.pressure_nperseg, pt.pressure.shape[1])
+        from ..spectral import segment_spectra
+
+        pf, spectra = segment_spectra(pt.pressure, float(pt.pressure_rate_hz), nperseg=p_seg,
+                                      noverlap=wc.noverlap(p_seg))
+        plo, phi = band_grid(len(pf), wc.max_band_bins)
+        pc, pw = band_centre_width_hz(pf, plo, phi)
+    else:
+        spectra = finger_ensembles(feats, delays, contacts)
+        plo, phi, pc, pw = lo, hi, fc, fw
+    g = multi_finger_g2(spectra, np.append(plo, 1), np.append(phi, spectra.shape[-2] - 1))
+    out["g2_multi"] = FeatureValues(g[:, :-1], g[:, -1], pc, pw,
+                                    spectra.shape[-3] * (phi - plo + 1), spectra.shape[-1])
+    return PresetFeatures(pt.preset, pt.slip_type, decided,
+                          np.stack([c.sum(axis=-1) for c in contacts], axis=-1), out)
+
+
+# -- classification ---------------------------------------------------------------------------
+def stratified_folds(keys: tuple[str, ...] | list[str], classes: np.ndarray, k: int,
+                     seed: int) -> np.ndarray:
+    """(T,) fold index of each trial, by the rule of :func:`tactile_cli.learn.splits.cv_folds`
+    (mode ``stratified``): the classes in natural order, within each the trials ordered by
+    SHA-256 of ``"<seed>|<key>"`` (``key`` = ``<file name>/<trial>``) and dealt round the
+    ``k`` folds, continuing where the previous class stopped; so ``tactile train --cv k``
+    with ``data.split: {mode: stratified, by: slip}`` and the same seed makes the same
+    folds. Independent of file order."""
+    from ..natural import natural_key
+
+    fold = np.zeros(len(keys), dtype=np.int64)
+    pos = 0
+    for value in sorted({str(c) for c in classes.tolist()}, key=natural_key):
+        idx = [i for i in range(len(keys)) if str(classes[i]) == value]
+        idx.sort(key=lambda i: hashlib.sha256(f"{seed}|{keys[i]}".encode()).hexdigest())
+        for i in idx:
+            fold[i] = pos % k
+            pos += 1
+    return fold
+
+
+def gnb_predict(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray) -> np.ndarray:
+    """Gaussian naive Bayes on one feature per column, every column its own model:
+    (n, B) training values, (n,) integer classes, (m, B) test values -> (m, B) predicted
+    classes; the same rule as scikit-learn's GaussianNB (class priors from the training
+    set, variances plus 1e-9 x the largest feature variance)."""
+    classes = np.unique(y_train)
+    eps = 1e-9 * x_train.var(axis=0)
+    jll = []
+    for c in classes:
+        xc = x_train[y_train == c]
+        mu, var = xc.mean(axis=0), xc.var(axis=0) + eps
+        prior = len(xc) / len(x_train)
+        jll.append(np.log(prior) - 0.5 * np.log(2 * np.pi * var)
+                   - 0.5 * (x_test - mu) ** 2 / var)
+    return classes[np.argmax(np.stack(jll), axis=0)]
+
+
+def _cv_predictions(values: np.ndarray, y: np.ndarray, folds: np.ndarray) -> np.ndarray:
+    """(T, B) out-of-fold predictions of every column."""
+    pred = np.empty(values.shape, dtype=y.dtype)
+    for f in np.unique(folds):
+        test = folds == f
+        pred[test] = gnb_predict(values[~test], y[~test], values[test])
+    return pred
+
+
+@dataclass(frozen=True)
+class FeatureScore:
+    """Accuracy (fraction) of one feature of one preset; bands as (f, w) Hz."""
+
+    preset: str
+    feature: str
+    n_trials: int
+    n_decided: int
+    full_spectrum: float
+    nested_best_band: float
+    optimistic_best_band: float
+    optimistic_band_hz: tuple[float, float]
+    nested_bands_hz: tuple[tuple[float, float], ...]
+    n_channels: int
+    rank_deficient_bands: float
+    """Share of the search bands whose CSD averages fewer segment-bin products than
+    channels (G2 biased upward there)."""
+    min_averages: int
+
+    def as_dict(self) -> dict[str, Any]:
+        common = Counter(self.nested_bands_hz).most_common(1)
+        return {"preset": self.preset, "feature": self.feature, "n_trials": self.n_trials,
+                "n_decided": self.n_decided, "full_spectrum": round(self.full_spectrum, 4),
+                "nested_best_band": round(self.nested_best_band, 4),
+                "optimistic_best_band": round(self.optimistic_best_band, 4),
+                "optimistic_band_hz": [round(v, 3) for v in self.optimistic_band_hz],
+                "nested_band_most_chosen_hz": [round(v, 3) for v in common[0][0]]
+                if common else None,
+                "n_channels": self.n_channels,
+                "rank_deficient_bands": round(self.rank_deficient_bands, 4),
+                "min_averages": self.min_averages}
+
+
+def score_feature(fv: FeatureValues, y: np.ndarray, names: list[str], folds: np.ndarray,
+                  fcfg: FeatureConfig, preset: str, feature: str, n_trials: int
+                  ) -> FeatureScore:
+    """Full-spectrum, nested best-band and optimistic best-band CV accuracy of one
+    feature on the decided trials (``y`` integer classes, ``folds`` (T,))."""
+    from sklearn.naive_bayes import GaussianNB
+
+    values = np.nan_to_num(fv.values, nan=0.0)
+    full = np.nan_to_num(fv.full, nan=0.0)[:, None]
+    full_acc = float((_cv_predictions(full, y, folds)[:, 0] == y).mean())
+    per_band = (_cv_predictions(values, y, folds) == y[:, None]).mean(axis=0)
+    best = int(np.argmax(per_band))
+    correct, chosen = 0, []
+    for f in np.unique(folds):
+        train, test = folds != f, folds == f
+        tr_names = [n for n, t in zip(names, train, strict=True) if t]
+        inner = stratified_folds(tr_names, y[train], fcfg.inner_folds, fcfg.seed + 1)
+        inner_acc = (_cv_predictions(values[train], y[train], inner)
+                     == y[train][:, None]).mean(axis=0)
+        b = int(np.argmax(inner_acc))
+        chosen.append((float(fv.f_hz[b]), float(fv.w_hz[b])))
+        model = GaussianNB().fit(values[train][:, [b]], y[train])
+        correct += int((model.predict(values[test][:, [b]]) == y[test]).sum())
+    return FeatureScore(preset, feature, n_trials, len(y), full_acc, correct / len(y),
+                        float(per_band[best]), (float(fv.f_hz[best]), float(fv.w_hz[best])),
+                        tuple(chosen), fv.n_channels,
+                        float((fv.n_averages < fv.n_channels).mean()),
+                        int(fv.n_averages.min()))
+
+
+@dataclass(frozen=True)
+class SlipInterfaceResult:
+    """Accuracy table of :func:`slip_interface`, per preset and feature."""
+
+    path: Path
+    scores: tuple[FeatureScore, ...]
+    folds: int
+    inner_folds: int
+    datasets: tuple[str, ...]
+    elapsed_s: float
+    features: dict[str, PresetFeatures] = field(default_factory=dict, repr=False)
+
+    def as_dict(self) -> dict[str, Any]:
+        nested = [s.nested_best_band for s in self.scores]
+        return {"file": str(self.path), "datasets": list(self.datasets),
+                "folds": self.folds, "inner_folds": self.inner_folds,
+                "classifier": "Gaussian naive Bayes (scikit-learn), one feature",
+                "scores": [s.as_dict() for s in self.scores],
+                "nested_at_least_85": sum(a >= 0.85 for a in nested),
+                "n_combinations": len(nested), "elapsed_s": round(self.elapsed_s, 3)}
+
+
+def slip_interface(path: str | Path, fcfg: FeatureConfig, *,
+                   progress: Progress | None = None) -> SlipInterfaceResult:
+    """Classify the slip interface (hand/world) of every preset's trials in ``path``
+    (Tables 4-6): see the module docstring. Trials below the noise floor are left out
+    (counted in ``n_trials - n_decided``)."""
+    started = time.perf_counter()
+    progress = progress or NullProgress()
+    scores: list[FeatureScore] = []
+    kept: dict[str, PresetFeatures] = {}
+    with TactileFile(path) as tf:
+        presets = file_presets(tf)
+        datasets = sorted({str(t.labels.get("dataset", "")) for t in tf.trials()})
+        progress.start(len(presets), "slip interface")
+        for preset in presets:
+            pt = read_preset_trials(tf, preset)
+            bad = sorted(set(pt.slip_type.tolist()) - set(SLIP_TYPES))
+            if bad:
+                raise InputError(f"trial label slip has values {bad}; expected hand or world",
+                                 path=tf.path)
+            pf = preset_features(pt, fcfg)
+            kept[preset] = pf
+            d = pf.decided
+            y = (pt.slip_type[d] == "world").astype(np.int64)
+            names = [f"{Path(path).name}/{n}" for n, keep in zip(pt.names, d, strict=True)
+                     if keep]
+            if min(np.bincount(y, minlength=2)) < fcfg.folds:
+                raise InputError(f"preset {preset!r}: each slip type needs at least `folds` "
+                                 f"(={fcfg.folds}) trials above the noise floor",
+                                 path=tf.path)
+            folds = stratified_folds(names, y, fcfg.folds, fcfg.seed)
+            for feature in FEATURES:
+                fv = pf.features[feature]
+                sub = FeatureValues(fv.values[d], fv.full[d], fv.f_hz, fv.w_hz,
+                                    fv.n_averages, fv.n_channels)
+                scores.append(score_feature(sub, y, names, folds, fcfg, preset, feature,
+                                            len(pt.names)))
+            progress.advance(1)
+        progress.finish()
+    return SlipInterfaceResult(Path(path), tuple(scores), fcfg.folds, fcfg.inner_folds,
+                               tuple(datasets), time.perf_counter() - started, kept)
+
+
+# -- the feature stream -----------------------------------------------------------------------
+def _named_bins(f_hz: np.ndarray, bands: dict[str, tuple[float, float]]
+                ) -> tuple[list[str], np.ndarray, np.ndarray]:
+    df = float(f_hz[1] - f_hz[0])
+    top = len(f_hz) - 1
+    names, lo, hi = [], [], []
+    for name, (a, b) in bands.items():
+        i = int(np.clip(np.ceil(a / df - 1e-9), 1, top))
+        j = int(np.clip(np.floor(b / df + 1e-9), i, top))
+        names.append(name)
+        lo.append(i)
+        hi.append(j)
+    return names + ["full"], np.array(lo + [1]), np.array(hi + [top])
+
+
+@dataclass(frozen=True)
+class FeatureStreamResult:
+    out: Path
+    n_trials: int
+    n_windows: int
+    channels: tuple[str, ...]
+    window_s: float
+    hop_s: float
+    rank_deficient: dict[str, bool]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"out": str(self.out), "n_trials": self.n_trials, "n_windows": self.n_windows,
+                "stream": FEATURE_STREAM, "channels": list(self.channels),
+                "window_s": self.window_s, "hop_s": self.hop_s,
+                "rank_deficient": self.rank_deficient}
+
+
+def write_feature_stream(path: str | Path, out: str | Path, fcfg: FeatureConfig, *,
+                         command: str | None = None, provenance: dict[str, Any] | None = None,
+                         overwrite: bool = False, progress: Progress | None = None
+                         ) -> FeatureStreamResult:
+    """Gamma, single- and multi-finger G2 per window (``window_s`` every ``hop_s``) and
+    per named band of ``fcfg.bands_hz`` (plus ``full``) for every taxel trial of ``path``,
+    written to ``out`` as stream ``spectral_features`` (channels ``<feature>_<band>``,
+    one sample per window at its end time) with per-window labels ``slip`` (rest, hand,
+    world: the trial's slip type once the window's centre lies inside its slip segment). Contact
+    is estimated once per trial (rest against slip segment). Windows whose CSD averages
+    fewer segment-bin products than channels are flagged in the sensor attribute
+    ``rank_deficient_bands``."""
+    progress = progress or NullProgress()
+    classes = (REST, *SLIP_TYPES)
+    n_windows = 0
+    flags: dict[str, bool] = {}
+    channels: tuple[str, ...] = ()
+    with TactileFile(path) as tf, StoreWriter(out, command=command, config=provenance,
+                                              overwrite=overwrite) as w:
+        source = w.add_source(path)
+        presets = file_presets(tf)
+        trials = [t for t in tf.trials() if str(t.labels.get("preset")) in presets]
+        progress.start(len(trials), "spectral features")
+        for preset in presets:
+            wc = _welch(fcfg, preset)
+            bands = fcfg.bands_hz.get(preset, {})
+            pt = read_preset_trials(tf, preset)
+            rate = pt.rate_hz
+            win = int(round(fcfg.window_s * rate))
+            hop = max(1, int(round(fcfg.hop_s * rate)))
+            nperseg = min(wc.nperseg, win)
+            if win < 8:
+                raise InputError(f"`window_s` (={fcfg.window_s}) holds {win} samples of "
+                                 f"preset {preset!r}; at least 8 are needed", path=tf.path)
+            f_hz = np.fft.rfftfreq(nperseg, 1 / rate)
+            band_names, lo, hi = _named_bins(f_hz, bands)
+            channels = tuple(f"{feat}_{b}" for feat in FEATURES for b in band_names)
+            noverlap = wc.noverlap(nperseg)
+            n_seg = (win - noverlap) // (nperseg - noverlap)
+            n_avg = n_seg * (hi - lo + 1)
+            flags[preset] = bool((n_avg < pt.slip[0].shape[-1]).any())
+            sensor = w.add_sensor(f"{preset}_spectral", kind="taxel_array",
+                                  sample_rate_hz=1.0 / fcfg.hop_s, channel_names=channels,
+                                  channel_units="1", preset=preset,
+                                  window_s=fcfg.window_s, hop_s=fcfg.hop_s,
+                                  rank_deficient_bands=",".join(
+                                      n for n, a in zip(band_names, n_avg, strict=True)
+                                      if a < pt.slip[0].shape[-1]),
+                                  description="power ratio Gamma and group square coherence "
+                                  "G2 per window and band (paper 004)")
+            delays = pt.delays_s if fcfg.sequential_correction else None
+            for ti, name in enumerate(pt.names):
+                trial = tf.trial(name)
+                sigs = [trial.signal(taxel_stream(preset, k)) for k in range(len(pt.slip))]
+                data = np.stack([s.data.astype(np.float64) for s in sigs])  # (F, n, N)
+                n = min(len(s.data) for s in sigs)
+                ends = np.arange(win, n + 1, hop)
+                idx = ends[:, None] - win + np.arange(win)
+                windows = data[:, :n][:, idx]                                # (F, W, win, N)
+                contacts = [np.broadcast_to(
+                    contact_taxels(pt.rest[k][ti], pt.slip[k][ti], fcfg.contact_threshold)
+                    if fcfg.contact_estimation else np.ones(data.shape[-1], dtype=bool),
+                    (len(ends), data.shape[-1])) for k in range(len(sigs))]
+                feats = [array_features(windows[k], rate, lo, hi, nperseg=nperseg,
+                                        noverlap=noverlap,
+                                        delays_s=delays, contact=contacts[k])
+                         for k in range(len(sigs))]
+                gamma = np.nanmean([f.gamma for f in feats], axis=0)
+                g2 = np.nanmean([f.g2 for f in feats], axis=0)
+                g2m = multi_finger_g2(finger_ensembles(feats, delays, contacts), lo, hi)
+                values = np.concatenate([gamma, g2, g2m], axis=1)
+                t_end = sigs[0].t_s[ends - 1] + 1.0 / rate
+                s0, _ = _segment(trial, SLIP)
+                centre = t_end - fcfg.window_s / 2
+                label = np.where(centre > s0 + 1e-9, classes.index(pt.slip_type[ti]), 0)
+                tw = w.trial(name, labels=trial.labels, split=trial.split, sources=[source],
+                             annotations=[(a.start_s, a.end_s, a.label)
+                                          for a in trial.annotations],
+                             duration_s=trial.duration_s)
+                tw.write_signal(FEATURE_STREAM, sensor=sensor, data=np.nan_to_num(values),
+                                t_s=t_end, sample_labels={"slip": (label.astype(np.int64),
+                                                                   classes)})
+                n_windows += len(ends)
+                progress.advance(1)
+        progress.finish()
+        written = w.commit()
+    return FeatureStreamResult(written, len(trials), n_windows, channels, fcfg.window_s,
+                               fcfg.hop_s, flags)
+
+
+# -- provenance and atomic outputs ------------------------------------------------------------
+def provenance_record(inputs: list[str | Path], config: dict[str, Any]) -> dict[str, Any]:
+    """``command``, ``tool_version``, ``created_utc``, ``config`` and each input's path,
+    size and SHA-256."""
+    from .._version import __version__
+    from ..store.writer import current_command, sha256_of, utc_now
+
+    return {"command": current_command(), "tool_name": "tactile-cli",
+            "tool_version": __version__, "created_utc": utc_now(), "config": config,
+            "inputs": [{"path": str(p), "size_bytes": Path(p).stat().st_size,
+                        "sha256": sha256_of(p)} for p in inputs]}
+
+
+def write_atomic(path: str | Path, write: Any, *, overwrite: bool = False) -> Path:
+    """Call ``write(tmp_path)`` and rename the temporary file to ``path`` (nothing is left
+    behind on failure). Raises :class:`InputError` when ``path`` exists and ``overwrite``
+    is false, or is a folder."""
+    import os
+
+    path = Path(path)
+    if path.is_dir():
+        raise InputError("is a folder; give a file name", path=path)
+    if path.exists() and not overwrite:
+        raise InputError("output exists; pass `overwrite=True` to replace it", path=path)
+    if not path.parent.is_dir():
+        raise InputError("output folder does not exist", path=path.parent)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path

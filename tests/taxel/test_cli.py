@@ -1,0 +1,56 @@
+"""The taxel commands: simulate taxel-slip, slip-interface, features spectral."""
+
+from __future__ import annotations
+
+import json
+
+from typer.testing import CliRunner
+
+from tactile_cli.cli import app
+
+runner = CliRunner()
+
+
+def test_help_of_every_taxel_command():
+    for args in (["simulate", "taxel-slip"], ["slip-interface"], ["features", "spectral"],
+                 ["features"]):
+        res = runner.invoke(app, [*args, "--help"])
+        assert res.exit_code == 0, res.output
+        assert "Usage" in res.output
+
+
+def test_simulate_then_classify_then_features(tmp_path):
+    scene = tmp_path / "scene.h5"
+    res = runner.invoke(app, ["simulate", "taxel-slip", "--out", str(scene), "--preset",
+                              "capacitive", "--trials", "10", "--seed", "102", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["trials"] == {"capacitive": {"hand": 10, "world": 10}}
+    fig, summary = tmp_path / "fig12.png", tmp_path / "si.json"
+    res = runner.invoke(app, ["slip-interface", str(scene), "--folds", "5", "--json",
+                              "--plot", str(fig), "--out", str(summary)])
+    assert res.exit_code == 0, res.output
+    table = json.loads(res.output)
+    assert table["n_combinations"] == 3 and table["folds"] == 5
+    assert fig.stat().st_size > 10_000
+    record = json.loads(summary.read_text())["provenance"]
+    assert record["command"] and record["inputs"][0]["sha256"]
+    feats = tmp_path / "features.h5"
+    res = runner.invoke(app, ["features", "spectral", str(scene), "--out", str(feats)])
+    assert res.exit_code == 0, res.output
+    assert "20 trial(s)" in res.output
+    res = runner.invoke(app, ["features", "spectral", str(scene), "--out", str(feats)])
+    assert res.exit_code == 2 and "--overwrite" in res.output
+
+
+def test_bad_inputs_are_one_line_errors(tmp_path, taxel_file):
+    res = runner.invoke(app, ["slip-interface", str(tmp_path / "none.h5")])
+    assert res.exit_code == 2 and "tactile: error:" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    res = runner.invoke(app, ["simulate", "taxel-slip", "--out", str(tmp_path / "x.h5"),
+                              "--preset", "glove"])
+    assert res.exit_code == 2 and "glove" in res.output
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text("folds: 10\nwindow: 3\n")
+    res = runner.invoke(app, ["slip-interface", str(taxel_file), "--config", str(cfg)])
+    assert res.exit_code == 2 and "window" in res.output
+    assert len(res.output.strip().splitlines()) == 1
