@@ -182,7 +182,7 @@ demo-taxel: $(STAMP)
 # The report: the real-data runs (when there are any) and the simulated ones, every data
 # file, and the figure folders (quick looks of every file, the event chain's figures).
 demo-report: $(STAMP)
-	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --title "tactile demo: where every number comes from" --out $(DEMO)/report
+	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --figures $(DEMO)/vibro --figures $(DEMO)/taxel --title "tactile demo: where every number comes from" --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 bench: $(STAMP)
