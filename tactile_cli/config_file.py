@@ -202,6 +202,16 @@ def describe_validation(err: Mapping[str, Any]) -> str:
     return f"`{key}`: {msg}" if key else msg
 
 
+def describe_key_first(err: Mapping[str, Any]) -> str:
+    """Wording of one pydantic error with the key first: `` `a.b`: unknown key `` or
+    `` `a.b`: msg `` (loc parts that are not names or indices are left out)."""
+    keys = tuple(k for k in err["loc"] if isinstance(k, str | int))
+    shown = ".".join(str(k) for k in keys) or "(top level)"
+    if err["type"] == "extra_forbidden":
+        return f"`{shown}`: unknown key"
+    return f"`{shown}`: {str(err['msg']).removeprefix('Value error, ')}"
+
+
 def validation_error(exc: Any, text: str, path: str | Path, *,
                      describe: Callable[[dict[str, Any]], str] = describe_validation
                      ) -> InputError:
@@ -215,7 +225,8 @@ def validation_error(exc: Any, text: str, path: str | Path, *,
     return InputError(describe(err), path=path, where=None if line is None else f"line {line}")
 
 
-__all__ = ["check_fits_in_memory", "decode_utf8", "describe_validation", "format_bytes",
+__all__ = ["check_fits_in_memory", "decode_utf8", "describe_key_first", "describe_validation",
+           "format_bytes",
            "key_line",
            "machine_memory_bytes", "missing_file_error", "os_error", "parse_yaml", "read_bytes",
            "read_config_text", "read_text", "read_yaml", "validation_error"]

@@ -11,11 +11,10 @@ is one :class:`~tactile_cli.errors.InputError` naming the file, the line and the
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config_file import load_yaml_model
+from ..config_file import describe_key_first, load_yaml_model
 
 
 class _Model(BaseModel):
@@ -141,16 +140,8 @@ class VibroSceneConfig(_Model):
         return VibroSceneConfig.model_validate({**self.model_dump(), "duration_s": duration_s})
 
 
-def _describe(err: dict[str, Any]) -> str:
-    keys = tuple(k for k in err["loc"] if isinstance(k, str | int))
-    shown = ".".join(str(k) for k in keys) or "(top level)"
-    if err["type"] == "extra_forbidden":
-        return f"`{shown}`: unknown key"
-    return f"`{shown}`: {str(err['msg']).removeprefix('Value error, ')}"
-
-
 def load_vibro_config(path: str | Path) -> VibroSceneConfig:
     """Read and validate a scene config file (one :class:`InputError` line on a problem)."""
-    return load_yaml_model(path, VibroSceneConfig, describe=_describe,
+    return load_yaml_model(path, VibroSceneConfig, describe=describe_key_first,
                            not_a_mapping="a vibro-slip scene config is a YAML mapping; see "
                            "configs/scene_vibro_slip.yaml")

@@ -15,11 +15,10 @@ names the file, the line and the key.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..config_file import load_yaml_model
+from ..config_file import describe_key_first, load_yaml_model
 
 #: The fixed node every chain ends at (the office table of Fig. 2).
 GROUND = "ground"
@@ -124,17 +123,9 @@ class ModelConfig(_Model):
         return self
 
 
-def _describe(err: dict[str, Any]) -> str:
-    keys = tuple(k for k in err["loc"] if isinstance(k, str | int))
-    shown = ".".join(str(k) for k in keys) or "(top level)"
-    if err["type"] == "extra_forbidden":
-        return f"`{shown}`: unknown key"
-    return f"`{shown}`: {str(err['msg']).removeprefix('Value error, ')}"
-
-
 def load_model_config(path: str | Path) -> ModelConfig:
     """Read and validate a lumped-model config (one :class:`InputError` line on a problem)."""
-    return load_yaml_model(path, ModelConfig, describe=_describe,
+    return load_yaml_model(path, ModelConfig, describe=describe_key_first,
                            not_a_mapping="a lumped-model config is a YAML mapping; see "
                            "configs/vibro_model.yaml")
 
@@ -236,7 +227,7 @@ class SceneConfig(_Model):
 def load_scene_config(path: str | Path) -> SceneConfig:
     """Read and validate a vibrotouch scene config (one :class:`InputError` line on a
     problem)."""
-    return load_yaml_model(path, SceneConfig, describe=_describe,
+    return load_yaml_model(path, SceneConfig, describe=describe_key_first,
                            not_a_mapping="a vibrotouch scene config is a YAML mapping; see "
                            "configs/scene_vibrotouch.yaml")
 
@@ -304,6 +295,6 @@ class DetectorConfig(_Model):
 
 def load_detector_config(path: str | Path) -> DetectorConfig:
     """Read and validate a detector config (one :class:`InputError` line on a problem)."""
-    return load_yaml_model(path, DetectorConfig, describe=_describe,
+    return load_yaml_model(path, DetectorConfig, describe=describe_key_first,
                            not_a_mapping="a contact-detector config is a YAML mapping; see "
                            "configs/detect_contact.yaml")
