@@ -1,12 +1,21 @@
 """Spectral methods any multichannel stream can enter: STFT settings and spectrograms,
-Welch band power, spectral centroid and the anti-alias resampling of bandwidth studies;
+Welch band power, spectral centroid and the anti-alias resampling of bandwidth studies
+(first needed by the accelerometer fingertips of paper 001, :mod:`tactile_cli.accel`);
 sliding spectra with band tracking (peak amplitude and frequency in a band, offline or as
-samples arrive), first needed by the active-vibration chain of paper 003.
+samples arrive; the active-vibration chain of paper 003); Welch cross-spectra, the power
+ratio Gamma and the group square coherence G2, per bin and per band, of one array or
+across arrays (:mod:`._coherence`, :mod:`._array_features`; the taxel chain of paper 004).
 
-Arrays in, arrays out (numpy and scipy only); first needed by the accelerometer
-fingertips of paper 001 (:mod:`tactile_cli.accel`).
+Arrays in, arrays out (numpy and scipy only).
 """
 
+from ._array_features import ArrayFeatures as ArrayFeatures
+from ._array_features import array_features as array_features
+from ._array_features import band_centre_width_hz as band_centre_width_hz
+from ._array_features import band_grid as band_grid
+from ._array_features import finger_ensembles as finger_ensembles
+from ._array_features import masked_g2 as masked_g2
+from ._array_features import multi_finger_g2 as multi_finger_g2
 from ._band_power import band_power as band_power
 from ._band_power import spectral_centroid as spectral_centroid
 from ._band_power import welch_psd as welch_psd
@@ -40,4 +49,6 @@ __all__ = ["STFT_LENGTHS", "FrameSettings", "FrameSpectra", "SpectrumTracker", "
 __all__ += ["band_sums", "coherence_matrix", "cross_spectral_matrix", "g2_noise_floor",
             "group_square_coherence", "group_square_coherence_bins",
             "group_square_coherence_windows", "local_ensemble_power",
-            "power_ratio", "segment_spectra", "welch_segment_count"]  # paper 004
+            "power_ratio", "segment_spectra", "welch_segment_count",  # paper 004
+            "ArrayFeatures", "array_features", "band_centre_width_hz", "band_grid",
+            "finger_ensembles", "masked_g2", "multi_finger_g2"]

@@ -29,18 +29,17 @@ import numpy as np
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.trials import TactileFile, Trial
-from ..store.writer import StoreWriter
-from .config import SLIP_TYPES, FeatureConfig, WelchConfig
-from .features import (
-    above_noise_floor,
+from ..spectral import (
     array_features,
     band_centre_width_hz,
     band_grid,
-    contact_taxels,
     finger_ensembles,
     multi_finger_g2,
 )
+from ..store.trials import TactileFile, Trial
+from ..store.writer import StoreWriter
+from .config import SLIP_TYPES, FeatureConfig, WelchConfig
+from .features import above_noise_floor, contact_taxels
 from .simulate import REST, SLIP, pressure_stream, taxel_stream
 
 FEATURES = ("gamma", "g2_single", "g2_multi")

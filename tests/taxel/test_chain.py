@@ -7,10 +7,11 @@ import pytest
 from sklearn.naive_bayes import GaussianNB
 
 from tactile_cli.errors import InputError
+from tactile_cli.spectral import band_grid
 from tactile_cli.store.trials import TactileFile
 from tactile_cli.taxel import FeatureConfig, SceneConfig, slip_interface, write_feature_stream
 from tactile_cli.taxel.config import default_presets
-from tactile_cli.taxel.features import above_noise_floor, band_grid, contact_taxels
+from tactile_cli.taxel.features import above_noise_floor, contact_taxels
 from tactile_cli.taxel.pipeline import (
     gnb_predict,
     preset_features,
