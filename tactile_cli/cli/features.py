@@ -1,8 +1,10 @@
-"""`tactile features spectral FILE --out FILE`: spectral features as a stream."""
+"""`tactile features spectral FILE --out FILE [--stream NAME]`: spectral features as a
+stream."""
 
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -12,7 +14,7 @@ from ..errors import InputError
 from ._errors import Flag, run_guarded
 from .progress import RichProgress
 
-FLAGS: dict[str, Flag] = {}
+FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band"}
 
 app = typer.Typer(
     name="features",
@@ -33,6 +35,24 @@ def spectral_command(
     config: Annotated[Path | None, typer.Option(
         "--config", "-c", help="Feature config YAML (see configs/taxel_features.yaml): "
         "window, hop and bands; default: the built-in defaults.", metavar="CONFIG")] = None,
+    stream: Annotated[str | None, typer.Option(
+        help="Any multichannel stream instead of the taxel-slip layout: Gamma and G2 of its "
+        "channels (or of each --group) per window and band, its per-sample labels carried "
+        "over.", show_default=False)] = None,
+    group: Annotated[list[str] | None, typer.Option(
+        "--group", help="With --stream: channel globs of one array, comma-separated (e.g. "
+        "'L_*'); repeat for several arrays (G2 across them too). Default: one array of "
+        "every channel.", show_default=False)] = None,
+    band: Annotated[list[str] | None, typer.Option(
+        "--band", help="With --stream: a named band NAME=LOW-HIGH in Hz (e.g. "
+        "mid=100-400); repeatable; 'full' is always added.", show_default=False)] = None,
+    window_s: Annotated[float, typer.Option(
+        "--window-s", min=1e-6, help="With --stream: window length (s).")] = 1.0,
+    hop_s: Annotated[float, typer.Option(
+        "--hop-s", min=1e-6, help="With --stream: step between windows (s).")] = 0.25,
+    nperseg: Annotated[int, typer.Option(
+        "--nperseg", min=8, help="With --stream: Welch segment (samples; at most the "
+        "window), overlap half.")] = 64,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
                        ] = False,
@@ -43,7 +63,9 @@ def spectral_command(
     """Power ratio Gamma and single- and multi-finger group square coherence G2 (paper 004)
     per sliding window and band, as stream spectral_features (channels
     <feature>_<band>, one sample per window) with per-window labels slip (rest, hand,
-    world), for tactile train CONFIG --data OUT."""
+    world), for tactile train CONFIG --data OUT. With --stream NAME: the same features of
+    any multichannel stream (accelerometers, vibration fingers, taxels of any layout), one
+    array or several (--group), the stream's per-sample labels taken at each window's end."""
 
     def body() -> None:
         from ..store.writer import current_command
@@ -54,6 +76,11 @@ def spectral_command(
             raise InputError("file not found", path=file)
         if out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=out)
+        if stream is not None:
+            _any_stream()
+            return
+        if group or band:
+            raise InputError("--group and --band go with --stream NAME")
         cfg = load_feature_config(config) if config is not None else FeatureConfig()
         record = provenance_record([file] + ([config] if config else []),
                                    cfg.model_dump(mode="json"))
@@ -70,5 +97,46 @@ def spectral_command(
                    f"{len(result.channels)} channels"
                    + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
                       if flagged else ""))
+
+    def _any_stream() -> None:
+        from ..spectral.stream_features import write_stream_features
+        from ..store.writer import current_command
+
+        if config is not None:
+            raise InputError("--config is the taxel-slip layout's; with --stream give "
+                             "--window-s, --hop-s, --nperseg, --band and --group")
+        bands: dict[str, tuple[float, float]] = {}
+        for text in band or []:
+            name, sep, span = text.partition("=")
+            lo, dash, hi = span.partition("-")
+            try:
+                bands[name.strip()] = (float(lo), float(hi))
+            except ValueError:
+                raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
+                                 "mid=100-400") from None
+            if not (sep and dash and name.strip()):
+                raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
+                                 "mid=100-400")
+        groups = [[g.strip() for g in text.split(",") if g.strip()] for text in group or []]
+        settings = {"stream": stream, "window_s": window_s, "hop_s": hop_s,
+                    "nperseg": nperseg, "bands_hz": bands, "groups": groups}
+        with RichProgress(enabled=progress) as bar:
+            result = write_stream_features(
+                file, out, stream=stream, window_s=window_s, hop_s=hop_s, nperseg=nperseg,
+                bands_hz=bands, groups=groups or None, command=current_command(),
+                config=settings, overwrite=overwrite, progress=bar)
+        if as_json:
+            typer.echo(json.dumps(result.as_dict(), indent=2))
+        else:
+            typer.echo(f"wrote {result.out}: {result.n_trials} trial(s), {result.n_windows} "
+                       f"windows of {window_s:g} s every {hop_s:g} s, "
+                       f"{len(result.channels)} channels from {len(result.groups)} "
+                       f"array(s) of {stream}"
+                       + (f"; rank-deficient bands (G2 biased up): "
+                          f"{', '.join(result.rank_deficient)}" if result.rank_deficient
+                          else ""))
+        if result.too_short:
+            print(f"tactile: note: left out, shorter than one window: "
+                  f"{', '.join(result.too_short)}", file=sys.stderr)
 
     run_guarded(body, flags=FLAGS)

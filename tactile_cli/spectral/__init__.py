@@ -6,7 +6,9 @@ samples arrive; the active-vibration chain of paper 003); Welch cross-spectra, t
 ratio Gamma and the group square coherence G2, per bin and per band, of one array or
 across arrays (:mod:`._coherence`, :mod:`._array_features`; the taxel chain of paper 004).
 
-Arrays in, arrays out (numpy and scipy only).
+Arrays in, arrays out (numpy and scipy only), except :mod:`.stream_features`, the
+file-level verb that writes those features of any stream of a tactile file as a new stream
+(``tactile features spectral --stream``).
 """
 
 from ._array_features import ArrayFeatures as ArrayFeatures
