@@ -6,15 +6,17 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from ..errors import InputError
-from ._errors import Flag, run_guarded
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
+from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
 from .progress import RichProgress
 
-FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band"}
+FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir",
+                          **BATCH_FLAGS}
 
 app = typer.Typer(
     name="features",
@@ -27,11 +29,19 @@ app = typer.Typer(
 
 @app.command("spectral")
 def spectral_command(
-    file: Annotated[Path, typer.Argument(help="Tactile HDF5 file of taxel-array trials "
-                                         "(tactile simulate taxel-slip).", metavar="FILE",
-                                         show_default=False)],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output tactile HDF5 file.",
-                                      metavar="FILE", show_default=False)],
+    files: Annotated[list[Path], typer.Argument(
+        help="Tactile HDF5 file of taxel-array trials (tactile simulate taxel-slip), or with "
+        "--stream any tactile file; several with --out-dir.", metavar="FILE",
+        show_default=False)],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output tactile HDF5 file "
+                                             "(one input).", metavar="FILE",
+                                             show_default=False)] = None,
+    out_dir: Annotated[Path | None, typer.Option(
+        "--out-dir", help="With --stream: one output per input, <input stem>.h5, one task "
+        "per file on Dask (--workers, --scheduler); outputs newer than their input are "
+        "skipped.", metavar="FOLDER", show_default=False)] = None,
+    scheduler: SchedulerOption = None,
+    workers: WorkersOption = None,
     config: Annotated[Path | None, typer.Option(
         "--config", "-c", help="Feature config YAML (see configs/taxel_features.yaml): "
         "window, hop and bands; default: the built-in defaults.", metavar="CONFIG")] = None,
@@ -72,12 +82,27 @@ def spectral_command(
         from ..taxel import FeatureConfig, load_feature_config, write_feature_stream
         from ..taxel.pipeline import provenance_record
 
+        if (out is None) == (out_dir is None):
+            raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
+                             "input)")
+        if out_dir is not None:
+            if stream is None:
+                raise InputError("--out-dir goes with --stream NAME (the taxel-slip layout "
+                                 "is one file per scene: --out)")
+            _each_stream(out_dir)
+            return
+        if len(files) > 1:
+            raise InputError("--out takes one input; give --out-dir FOLDER for several",
+                             path=files[1])
+        if scheduler is not None or workers is not None:
+            raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
+        file = files[0]
         if not file.exists():
             raise InputError("file not found", path=file)
         if out.exists() and not overwrite:
             raise InputError("output exists; pass --overwrite to replace it", path=out)
         if stream is not None:
-            _any_stream()
+            _any_stream(file, out)
             return
         if group or band:
             raise InputError("--group and --band go with --stream NAME")
@@ -98,10 +123,7 @@ def spectral_command(
                    + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
                       if flagged else ""))
 
-    def _any_stream() -> None:
-        from ..spectral.stream_features import write_stream_features
-        from ..store.writer import current_command
-
+    def _settings() -> dict[str, Any]:
         if config is not None:
             raise InputError("--config is the taxel-slip layout's; with --stream give "
                              "--window-s, --hop-s, --nperseg, --band and --group")
@@ -118,13 +140,37 @@ def spectral_command(
                 raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
                                  "mid=100-400")
         groups = [[g.strip() for g in text.split(",") if g.strip()] for text in group or []]
-        settings = {"stream": stream, "window_s": window_s, "hop_s": hop_s,
-                    "nperseg": nperseg, "bands_hz": bands, "groups": groups}
+        return {"stream": stream, "window_s": window_s, "hop_s": hop_s, "nperseg": nperseg,
+                "bands_hz": bands, "groups": groups or None}
+
+    def _each_stream(folder: Path) -> None:
+        from ..spectral.stream_features import stream_features_each
+        from ._batch import FileBatchPrinter, finish_batch
+
+        def describe(item: Any) -> str:
+            return f"-> {item.output} ({item.value['n_windows']} windows)"
+
+        printer = FileBatchPrinter("features", progress=progress, todo="to do",
+                                   describe=describe,
+                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+        settings = _settings()
+        with printer.running():
+            result = stream_features_each(files, folder, settings=settings,
+                                          overwrite=overwrite, scheduler=scheduler,
+                                          workers=workers, on_plan=printer.on_plan,
+                                          on_progress=printer.on_progress,
+                                          on_item=printer.on_item)
+        finish_batch(result, as_json=as_json)
+
+    def _any_stream(file: Path, out: Path) -> None:
+        from ..spectral.stream_features import write_stream_features
+        from ..store.writer import current_command
+
+        settings = _settings()
         with RichProgress(enabled=progress) as bar:
             result = write_stream_features(
-                file, out, stream=stream, window_s=window_s, hop_s=hop_s, nperseg=nperseg,
-                bands_hz=bands, groups=groups or None, command=current_command(),
-                config=settings, overwrite=overwrite, progress=bar)
+                file, out, command=current_command(), config=settings,
+                overwrite=overwrite, progress=bar, **settings)
         if as_json:
             typer.echo(json.dumps(result.as_dict(), indent=2))
         else:

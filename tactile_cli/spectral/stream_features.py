@@ -12,18 +12,22 @@ too (each group summed into one virtual channel). The input stream's per-sample 
 carried over at each window's last sample, so a classifier trained on the features learns
 the same targets. The taxel chain's own feature stream (contact estimation, slip labels
 from its annotations) is :func:`tactile_cli.taxel.write_feature_stream`.
+
+Many files: :func:`stream_features_each`, one task per file on Dask
+(:func:`tactile_cli.batch.run_each`), each output written atomically by its worker.
 """
 
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.trials import TactileFile
@@ -217,5 +221,74 @@ def write_stream_features(
                                 tuple(short))
 
 
+def stream_features_task(spec: dict[str, Any]) -> dict[str, Any]:
+    """One task of :func:`stream_features_each` (module level, so Dask workers import it):
+    spec ``{"input", "output", "settings" (the keyword arguments of
+    :func:`write_stream_features`), "command"}``; returns the result as a dict, with the
+    trials left out as notes."""
+    result = write_stream_features(spec["input"], spec["output"], overwrite=True,
+                                   command=spec["command"], config=spec["settings"],
+                                   **spec["settings"])
+    out = result.as_dict()
+    out["notes"] = ([f"left out, shorter than one window: {', '.join(result.too_short)}"]
+                    if result.too_short else [])
+    return out
+
+
+def stream_features_each(
+    inputs: Sequence[str | Path],
+    out_dir: str | Path,
+    *,
+    settings: Mapping[str, Any],
+    overwrite: bool = False,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    command: str | None = None,
+    on_plan: Callable[[list[FileItem]], None] | None = None,
+    on_progress: Callable[[FileCounts], None] | None = None,
+    on_item: Callable[[FileItem], None] | None = None,
+) -> FileBatchResult:
+    """The features of each input file into ``<out_dir>/<input stem>.h5``, one task per
+    file on Dask (:func:`tactile_cli.batch.run_each`); ``settings``: the keyword arguments
+    of :func:`write_stream_features` (``stream``, ``window_s``, ...). Outputs newer than
+    their input are skipped unless ``overwrite``; a failed file never stops the others.
+    Refused before any work: a missing input, two inputs of one stem, an output that is a
+    folder."""
+    from ..batch import run_each
+    from ..store.writer import current_command
+
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise InputError("no input files given")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("`out_dir` is a file, not a folder", path=out)
+    seen: dict[str, Path] = {}
+    items = []
+    for path in paths:
+        if not path.is_file():
+            raise InputError("file not found", path=path)
+        target = out / f"{path.stem}.h5"
+        if target.name in seen:
+            raise InputError(f"inputs {str(seen[target.name])!r} and {str(path)!r} would both "
+                             f"be written to {target.name!r} in `out_dir`; rename one")
+        seen[target.name] = path
+        if target.is_dir():
+            raise InputError("output is a folder; remove or rename it", path=target)
+        fresh = (not overwrite and target.is_file()
+                 and target.stat().st_mtime > newest_mtime(path))
+        items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
+    if on_plan is not None:
+        on_plan(items)
+    out.mkdir(parents=True, exist_ok=True)
+    command = command if command is not None else current_command()
+    base = dict(settings)
+    return run_each(stream_features_task, items,
+                    lambda item: {"input": item.input, "output": item.output,
+                                  "settings": base, "command": command},
+                    verb="features", out_dir=str(out), scheduler=scheduler,
+                    workers=workers, on_progress=on_progress, on_item=on_item)
+
+
 __all__ = ["FEATURE_STREAM", "StreamFeaturesResult", "channel_groups", "named_bins",
-           "write_stream_features"]
+           "stream_features_each", "stream_features_task", "write_stream_features"]

@@ -91,3 +91,49 @@ def test_stream_options_are_checked(recording, tmp_path):
         assert res.exit_code == 2, (args, res.output)
         assert message in res.stderr and "Traceback" not in res.output, (args, res.stderr)
         assert not Path(out).exists()
+
+
+def test_many_files_on_a_worker_equal_one_file_runs(recording, tmp_path):
+    import os
+    import shutil
+
+    from ..ingest.test_ingest_out_dir import h5_differences
+
+    second = tmp_path / "again.h5"
+    shutil.copyfile(recording, second)
+    bad = tmp_path / "broken.h5"
+    bad.write_text("not HDF5\n")
+    args = ["--stream", "accel", "--group", "a_*", "--group", "b_*", "--nperseg", "128"]
+    single = tmp_path / "single.h5"
+    res = runner.invoke(app, ["features", "spectral", str(recording), "--out", str(single),
+                              *args])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "features"
+    res = runner.invoke(app, ["features", "spectral", str(recording), str(second), str(bad),
+                              "--out-dir", str(folder), *args, "--workers", "1", "--json",
+                              "--no-progress"])
+    assert res.exit_code == 2, res.output
+    got = json.loads(res.stdout)
+    assert got["counts"] == {"ok": 2, "skipped": 0, "failed": 1}
+    assert f"{bad}: failed: " in res.stderr and "Traceback" not in res.output
+    assert sorted(p.name for p in folder.iterdir()) == ["again.h5", "rec.h5"]
+    assert h5_differences(single, folder / "rec.h5", {"created_utc", "command"}) == []
+    # started again: the up-to-date output is skipped, the changed input redone
+    later = os.path.getmtime(folder / "again.h5") + 10
+    os.utime(second, (later, later))
+    res = runner.invoke(app, ["features", "spectral", str(recording), str(second),
+                              "--out-dir", str(folder), *args, "--workers", "0",
+                              "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "1 ok, 1 skipped (up to date), 0 failed" in res.stdout
+
+
+def test_out_or_out_dir(recording, tmp_path):
+    res = runner.invoke(app, ["features", "spectral", str(recording)])
+    assert res.exit_code == 2 and "give --out FILE (one input) or --out-dir" in res.stderr
+    res = runner.invoke(app, ["features", "spectral", str(recording), "--out-dir",
+                              str(tmp_path / "f")])
+    assert res.exit_code == 2 and "--out-dir goes with --stream NAME" in res.stderr
+    res = runner.invoke(app, ["features", "spectral", str(recording), str(recording),
+                              "--out", str(tmp_path / "o.h5"), "--stream", "accel"])
+    assert res.exit_code == 2 and "--out takes one input" in res.stderr
