@@ -16,8 +16,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
-from ..config_file import missing_file_error
+from ..batch import FileBatchResult, FileCounts, FileItem, plan_outputs, run_each
 from ..errors import InputError
 from ..store.writer import current_command
 
@@ -55,27 +54,8 @@ def prepare_each(
         raise InputError(f"`segment_s` (={segment_s}) must be positive")
     if cutoff_hz is not None and not cutoff_hz > 0:
         raise InputError(f"`cutoff_hz` (={cutoff_hz}) must be positive")
-    paths = [Path(p) for p in inputs]
-    if not paths:
-        raise InputError("no input files given")
+    items = plan_outputs(inputs, out_dir, overwrite=overwrite)
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` is a file, not a folder", path=out)
-    seen: dict[str, Path] = {}
-    items = []
-    for path in paths:
-        if not path.exists():
-            raise missing_file_error(path)
-        target = out / f"{path.stem}.h5"
-        if target.name in seen:
-            raise InputError(f"inputs {str(seen[target.name])!r} and {str(path)!r} would both "
-                             f"be written to {target.name!r} in `out_dir`; rename one")
-        seen[target.name] = path
-        if target.is_dir():
-            raise InputError("output is a folder; remove or rename it", path=target)
-        fresh = (not overwrite and target.is_file()
-                 and target.stat().st_mtime > newest_mtime(path))
-        items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
     if on_plan is not None:
         on_plan(items)
     out.mkdir(parents=True, exist_ok=True)

@@ -23,7 +23,9 @@ from ._files import FileBatchResult as FileBatchResult
 from ._files import FileCounts as FileCounts
 from ._files import FileItem as FileItem
 from ._files import newest_mtime as newest_mtime
+from ._files import plan_outputs as plan_outputs
 from ._files import run_each as run_each
 
 __all__ = ["SCHEDULER_ENV", "BatchCounts", "FileBatchResult", "FileCounts", "FileItem",
-           "TaskResult", "default_workers", "map_tasks", "newest_mtime", "one_line", "run_each"]
+           "TaskResult", "default_workers", "map_tasks", "newest_mtime", "one_line", "plan_outputs",
+           "run_each"]

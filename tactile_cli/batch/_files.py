@@ -17,6 +17,9 @@ input never stops the others; the result says which failed. The tasks write thei
 outputs atomically (temporary name, then rename), so what this layer adds to a stopped
 batch started again is only the skip the caller planned.
 
+:func:`plan_outputs` is the usual plan: one output per input in a folder, skipped when
+newer than its input.
+
 It knows no tactile data: items carry paths as strings, specs are plain dicts.
 """
 
@@ -28,6 +31,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from ..config_file import missing_file_error
+from ..errors import InputError
 from ._dask import BatchCounts, map_tasks
 
 Status = Literal["todo", "skipped", "ok", "failed"]
@@ -104,6 +109,42 @@ def newest_mtime(path: str | Path) -> float:
     return newest
 
 
+def plan_outputs(inputs: Sequence[str | Path], out_dir: str | Path, *,
+                 output_name: Callable[[Path], str] = lambda p: f"{p.stem}.h5",
+                 newer_than: float = 0.0, overwrite: bool = False,
+                 same_name_hint: str = "rename one") -> list[FileItem]:
+    """One item per input, its output ``<out_dir>/<output_name(input)>``, ``skipped`` where
+    that output exists and is newer than the input (a folder: everything in it) and than
+    ``newer_than`` (a time stamp of other inputs, such as a mapping), unless ``overwrite``.
+    Refused before any work (:class:`InputError`): no input, a missing input, ``out_dir``
+    a file, two inputs with one output name (``same_name_hint`` says what to do), an
+    output that is a folder."""
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise InputError("no input files given")
+    for path in paths:
+        if not path.exists():
+            raise missing_file_error(path)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("`out_dir` is a file, not a folder", path=out)
+    seen: dict[str, Path] = {}
+    items = []
+    for path in paths:
+        name = output_name(path)
+        if name in seen:
+            raise InputError(f"inputs {str(seen[name])!r} and {str(path)!r} would both be "
+                             f"written to {name!r} in `out_dir`; {same_name_hint}")
+        seen[name] = path
+        target = out / name
+        if target.is_dir():
+            raise InputError("output is a folder; remove or rename it", path=target)
+        fresh = (not overwrite and target.is_file()
+                 and target.stat().st_mtime > max(newest_mtime(path), newer_than))
+        items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
+    return items
+
+
 def run_each(
     task: Callable[[dict[str, Any]], dict[str, Any]],
     items: Sequence[FileItem],
@@ -149,4 +190,5 @@ def run_each(
     return FileBatchResult(verb, list(items), out_dir)
 
 
-__all__ = ["FileBatchResult", "FileCounts", "FileItem", "newest_mtime", "run_each"]
+__all__ = ["FileBatchResult", "FileCounts", "FileItem", "newest_mtime", "plan_outputs",
+           "run_each"]

@@ -18,8 +18,14 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
-from ..config_file import missing_file_error
+from ..batch import (
+    FileBatchResult,
+    FileCounts,
+    FileItem,
+    newest_mtime,
+    plan_outputs,
+    run_each,
+)
 from ..errors import InputError
 from ..store.writer import DEFAULT_COMPRESSION, Compression, current_command
 from . import IngestOptions, ingest
@@ -43,35 +49,12 @@ def plan(inputs: Sequence[str | Path], out_dir: str | Path, *,
     and the option files (mapping, sidecars), unless ``overwrite``. Refused before any
     work: a missing input, two inputs with one output name, an output that is a folder."""
     options = options or IngestOptions()
-    paths = [Path(p) for p in inputs]
-    if not paths:
-        raise InputError("no input files given")
-    for path in paths:
-        if not path.exists():
-            raise missing_file_error(path)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` is a file, not a folder", path=out)
-    seen: dict[str, Path] = {}
-    for path in paths:
-        name = output_name(path)
-        if name in seen:
-            raise InputError(f"inputs {str(seen[name])!r} and {str(path)!r} would both be "
-                             f"written to {name!r} in `out_dir`; rename one, or ingest them "
-                             "into one file with `out`")
-        seen[name] = path
     sidecars = [p for p in (options.mapping, options.annotations, options.trial_labels)
                 if p is not None]
     deps = max((newest_mtime(Path(p)) for p in sidecars if Path(p).exists()), default=0.0)
-    items = []
-    for path in paths:
-        target = out / output_name(path)
-        if target.is_dir():
-            raise InputError("output is a folder; remove or rename it", path=target)
-        fresh = (not overwrite and target.is_file()
-                 and target.stat().st_mtime > max(newest_mtime(path), deps))
-        items.append(IngestItem(str(path), str(target), "skipped" if fresh else "todo"))
-    return items
+    return plan_outputs(inputs, out_dir, output_name=output_name, newer_than=deps,
+                        overwrite=overwrite,
+                        same_name_hint="rename one, or ingest them into one file with `out`")
 
 
 def ingest_task(spec: dict[str, Any]) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime
+from ..batch import FileBatchResult, FileCounts, FileItem
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.trials import TactileFile
@@ -254,30 +254,11 @@ def stream_features_each(
     their input are skipped unless ``overwrite``; a failed file never stops the others.
     Refused before any work: a missing input, two inputs of one stem, an output that is a
     folder."""
-    from ..batch import run_each
+    from ..batch import plan_outputs, run_each
     from ..store.writer import current_command
 
-    paths = [Path(p) for p in inputs]
-    if not paths:
-        raise InputError("no input files given")
+    items = plan_outputs(inputs, out_dir, overwrite=overwrite)
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError("`out_dir` is a file, not a folder", path=out)
-    seen: dict[str, Path] = {}
-    items = []
-    for path in paths:
-        if not path.is_file():
-            raise InputError("file not found", path=path)
-        target = out / f"{path.stem}.h5"
-        if target.name in seen:
-            raise InputError(f"inputs {str(seen[target.name])!r} and {str(path)!r} would both "
-                             f"be written to {target.name!r} in `out_dir`; rename one")
-        seen[target.name] = path
-        if target.is_dir():
-            raise InputError("output is a folder; remove or rename it", path=target)
-        fresh = (not overwrite and target.is_file()
-                 and target.stat().st_mtime > newest_mtime(path))
-        items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
     if on_plan is not None:
         on_plan(items)
     out.mkdir(parents=True, exist_ok=True)
