@@ -323,6 +323,31 @@ def held_out_trials(trials: Sequence[SplitTrial], *, split_csv: str | Path, spli
 
 
 # -- cross-validation --------------------------------------------------------------------------
+def _deal_folds(keys: Sequence[str], strata: Mapping[str, Sequence[int]], k: int, seed: int,
+                files: Sequence[str] | None = None) -> list[int]:
+    """Fold index of each trial: each stratum (in the given order) dealt round the ``k``
+    folds in the order of :func:`_rank` of its keys (ties: ``files``), continuing where
+    the previous stratum stopped."""
+    fold_of = [0] * len(keys)
+    pos = 0
+    for idx in strata.values():
+        for i in sorted(idx, key=lambda i: (_rank(seed, keys[i]), files[i] if files else "")):
+            fold_of[i] = pos % k
+            pos += 1
+    return fold_of
+
+
+def stratified_fold_of(keys: Sequence[str], classes: Sequence[Any], k: int,
+                       seed: int) -> list[int]:
+    """Fold index of each trial by the ``stratified`` k-fold rule of :func:`cv_folds`, from
+    trial keys (``<file name>/<trial>``) and class values alone (no trial objects): the
+    classes (as text) in natural order, each dealt round the ``k`` folds in hash order."""
+    strata: dict[str, list[int]] = {}
+    for i, c in enumerate(classes):
+        strata.setdefault(str(c), []).append(i)
+    return _deal_folds(keys, {v: strata[v] for v in sorted(strata, key=natural_key)}, k, seed)
+
+
 def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int | str, *,
              by: str | None = None) -> FoldPlan:
     """The folds of ``k``-fold (an int >= 2) or ``"loto"`` cross-validation; see the module
@@ -368,15 +393,12 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
                 raise InputError("data.split.mode stratified needs data.split.by")
             strata = _strata(trials, str(by)) if mode == "stratified" \
                 else {"": list(range(n))}
-            pos = 0
             for value, idx in strata.items():
                 if mode == "stratified" and len(idx) < k:
                     warnings.append(f"class {by}={value} has {len(idx)} trial(s), fewer than "
                                     f"the {k} folds: {k - len(idx)} fold(s) hold none of it")
-                for i in sorted(idx, key=lambda i: (_rank(split_seed, trials[i].key),
-                                                    trials[i].file)):
-                    fold_of[i] = pos % k
-                    pos += 1
+            fold_of = _deal_folds([t.key for t in trials], strata, k, split_seed,
+                                  [t.file for t in trials])
     folds = []
     inner = SplitConfig(mode=mode if mode != "auto" else "random", by=by,
                         val_fraction=split.val_fraction, test_fraction=0.0, seed=split.seed)
@@ -396,4 +418,4 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
 
 __all__ = ["SPLITS", "Fold", "FoldPlan", "SplitAssignment", "assign_splits", "cv_folds",
            "default_by", "read_run_splits", "read_split_csv", "split_from_mapping",
-           "held_out_trials", "trial_class"]
+           "held_out_trials", "stratified_fold_of", "trial_class"]

@@ -12,13 +12,13 @@ slip-interface features and classify the slip interface.
 - :func:`write_feature_stream`: Gamma and G2 per window and named band as a signal stream
   ``spectral_features`` that ``tactile train`` reads.
 
-Folds are dealt per trial, seeded and independent of file order, like
-:mod:`tactile_cli.learn.splits` (not imported: importing ``learn`` imports torch).
+Folds are dealt per trial, seeded and independent of file order, by
+:mod:`tactile_cli.learn.splits` (the same rule as ``tactile train --cv``; importing it does
+not import torch).
 """
 
 from __future__ import annotations
 
-import hashlib
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..learn.splits import stratified_fold_of
 from ..progress import NullProgress, Progress
 from ..spectral import (
     array_features,
@@ -207,23 +208,12 @@ def preset_features(pt: PresetTrials, fcfg: FeatureConfig) -> PresetFeatures:
 # -- classification ---------------------------------------------------------------------------
 def stratified_folds(keys: tuple[str, ...] | list[str], classes: np.ndarray, k: int,
                      seed: int) -> np.ndarray:
-    """(T,) fold index of each trial, by the rule of :func:`tactile_cli.learn.splits.cv_folds`
-    (mode ``stratified``): the classes in natural order, within each the trials ordered by
-    SHA-256 of ``"<seed>|<key>"`` (``key`` = ``<file name>/<trial>``) and dealt round the
-    ``k`` folds, continuing where the previous class stopped; so ``tactile train --cv k``
-    with ``data.split: {mode: stratified, by: slip}`` and the same seed makes the same
-    folds. Independent of file order."""
-    from ..natural import natural_key
-
-    fold = np.zeros(len(keys), dtype=np.int64)
-    pos = 0
-    for value in sorted({str(c) for c in classes.tolist()}, key=natural_key):
-        idx = [i for i in range(len(keys)) if str(classes[i]) == value]
-        idx.sort(key=lambda i: hashlib.sha256(f"{seed}|{keys[i]}".encode()).hexdigest())
-        for i in idx:
-            fold[i] = pos % k
-            pos += 1
-    return fold
+    """(T,) fold index of each trial by :func:`tactile_cli.learn.splits.stratified_fold_of`
+    (the ``stratified`` rule of ``cv_folds``; ``key`` = ``<file name>/<trial>``), so
+    ``tactile train --cv k`` with ``data.split: {mode: stratified, by: slip}`` and the same
+    seed makes the same folds. Independent of file order."""
+    return np.asarray(stratified_fold_of(list(keys), classes.tolist(), k, seed),
+                      dtype=np.int64)
 
 
 def gnb_predict(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray) -> np.ndarray:

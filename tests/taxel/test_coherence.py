@@ -137,4 +137,6 @@ def test_windows_path_equals_per_window_path_on_threads():
                                            workers=2)
     _, spectra = segment_spectra(x, RATE_HZ, nperseg=256, noverlap=128)
     assert g2.shape == (5, len(f)) == (5, 129)
-    np.testing.assert_array_equal(g2, group_square_coherence_bins(spectra))
+    np.testing.assert_allclose(g2, group_square_coherence_bins(spectra), rtol=0, atol=1e-12)
+    _, one = group_square_coherence_windows(x, RATE_HZ, nperseg=256, noverlap=128, chunk=2)
+    np.testing.assert_array_equal(g2, one)                       # threads change nothing
