@@ -17,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
+.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -67,6 +67,7 @@ demo: $(STAMP)
 	$(MAKE) --no-print-directory demo-accel DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-vibro DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-taxel DEMO=$(DEMO)
+	$(MAKE) --no-print-directory demo-visuo DEMO=$(DEMO)
 	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
 	$(MAKE) --no-print-directory demo-report DEMO=$(DEMO)
 
@@ -181,10 +182,31 @@ demo-taxel: $(STAMP)
 	$(TACTILE) slip-interface $(DEMO)/taxel/scene.h5 --plot $(DEMO)/taxel/features.png --out $(DEMO)/taxel/slip_interface.json --no-progress
 	$(TACTILE) features spectral $(DEMO)/taxel/scene.h5 --out $(DEMO)/taxel/features.h5 --no-progress
 
+# The visuotactile chain of paper 002 on a DIGIT-like scene with known height maps: ball
+# presses -> contact circles and sphere normals (eqs. 5-8) -> the 5-32-32-32-3 normal MLP ->
+# height maps (eq. 9 + DST Poisson, RMSE against the truth) -> the slip signal (eq. 10) from
+# heights and from colour change, scored against the slip labels -> the slip-avoidance
+# monitor replayed on a closed-loop scene (Fig. 14). Calibration and trials come from one
+# simulated sensor (seed 0), as a lab calibrates the sensor it records with.
+VISUO := $(DEMO)/visuo
+demo-visuo: $(STAMP)
+	rm -rf $(VISUO)
+	mkdir -p $(VISUO)/figures
+	$(TACTILE) simulate digit-press $(VISUO)/scene --seed 0 --calibration-presses 12 --trials 2 --objects cable,box,hex_key_small --no-progress
+	$(TACTILE) ingest $(VISUO)/scene/calibration --trial-labels $(VISUO)/scene/calibration_labels.csv --px-per-mm 16 --out $(VISUO)/calib.h5
+	$(TACTILE) ingest $(VISUO)/scene/trials --trial-labels $(VISUO)/scene/trial_labels.csv --px-per-mm 16 --out $(VISUO)/trials.h5
+	$(TACTILE) normal-labels $(VISUO)/calib.h5 --out $(VISUO)/pixels.h5 --plot $(VISUO)/figures/calibration
+	$(TACTILE) train configs/train_mlp_normals.yaml --data $(VISUO)/pixels.h5 --out $(VISUO)/runs/normals
+	$(TACTILE) heightmap $(VISUO)/trials.h5 --model $(VISUO)/runs/normals --truth $(VISUO)/scene/truth --plot $(VISUO)/figures/heightmaps --out $(VISUO)/heights.h5 --no-progress
+	$(TACTILE) slip-signal $(VISUO)/heights.h5 --plot $(VISUO)/figures/slip_height --no-progress
+	$(TACTILE) slip-signal $(VISUO)/trials.h5 --source intensity --plot $(VISUO)/figures/slip_intensity --no-progress
+	$(TACTILE) simulate digit-avoidance $(VISUO)/avoid --seed 0 --object cable --no-progress
+	$(TACTILE) monitor $(VISUO)/avoid --plot $(VISUO)/figures/monitor --no-progress
+
 # The report: the real-data runs (when there are any) and the simulated ones, every data
 # file, and the figure folders (quick looks of every file, the event chain's figures).
 demo-report: $(STAMP)
-	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --figures $(DEMO)/vibro --figures $(DEMO)/taxel --title "tactile demo: where every number comes from" --out $(DEMO)/report
+	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --figures $(DEMO)/vibro --figures $(DEMO)/taxel --figures $(DEMO)/visuo/figures --title "tactile demo: where every number comes from" --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 bench: $(STAMP)

@@ -21,7 +21,11 @@ COMMAND = re.compile(r"`tactile [^`]*`|<code>tactile .*?</code>|\(tactile [^)]*\
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
 # files whose strings are command lines, not messages
 NOT_MESSAGES = {"samples/__init__.py": "builds the `tactile ingest` command lines it returns",
-                "accel/simulate.py": "records the `tactile ingest` command line of a scene"}
+                "accel/simulate.py": "records the `tactile ingest` command line of a scene",
+                "visuotactile/simulate.py": "returns the `tactile ingest` command lines of a "
+                "digit-press scene",
+                "visuotactile/avoidance.py": "records the `tactile ingest` command line of an "
+                "avoidance scene"}
 
 
 def _message_strings(tree: ast.AST):

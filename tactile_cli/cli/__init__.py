@@ -29,8 +29,11 @@ from . import features as _features
 from . import fit_fos as _fit_fos
 from . import frames as _frames
 from . import grade as _grade
+from . import heightmap as _heightmap
 from . import info as _info
 from . import ingest as _ingest
+from . import monitor as _monitor
+from . import normal_labels as _normal_labels
 from . import perturb as _perturb
 from . import plot as _plot
 from . import report as _report
@@ -38,6 +41,7 @@ from . import samples as _samples
 from . import simulate as _simulate
 from . import slip_interface as _slip_interface
 from . import slip_rate as _slip_rate
+from . import slip_signal as _slip_signal
 from . import sweep as _sweep
 from . import synth as _synth
 from . import train as _train
@@ -198,6 +202,16 @@ app.command("sweep", help="Train and evaluate a grid of model x window x channel
 app.command("report", context_settings=_MANY_FILES,
             help="One self-contained HTML page of runs, comparison and data files.")(
     _report.report_command
+)
+app.command("monitor", help="Replay visuotactile trials through the slip-avoidance monitor: "
+            "modes, grip commands, slips caught (paper 002, sec. V).")(_monitor.monitor_command)
+app.command("heightmap", help="Height maps of visuotactile frames: MLP normals, eq. 9 and a "
+            "DST Poisson solve (paper 002, Fig. 2).")(_heightmap.heightmap_command)
+app.command("slip-signal", help="Slip signal on a tactile mesh (eq. 10), adaptive threshold "
+            "and slip decision per trial (paper 002).")(_slip_signal.slip_signal_command)
+app.command("normal-labels", help="Calibration pixel table of the normal MLP from "
+            "ball-bearing presses: contact circles, sphere normals (paper 002, eqs. 5-8).")(
+    _normal_labels.normal_labels_command
 )
 
 

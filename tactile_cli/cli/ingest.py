@@ -26,6 +26,8 @@ FLAGS: dict[str, Flag] = {
     "annotations": "--annotations",
     "trial_labels": "--trial-labels",
     "frame_rate_hz": "--fps",
+    "reference": "--reference",
+    "px_per_mm": "--px-per-mm",
     "skip_unknown": "--skip-unknown",
     "out": "--out",
     "out_dir": "--out-dir",
@@ -79,6 +81,23 @@ def ingest_command(
             min=0.001, metavar="HZ",
             help="Frame rate of image folders without a timestamps.csv (default: 30 Hz assumed, "
             "with a note).",
+        ),
+    ] = None,
+    reference: Annotated[
+        str | None,
+        typer.Option(
+            "--reference", metavar="first|NAME",
+            help="Image folders: the no-contact reference frame of every folder: 'first' (the "
+            "first frame in natural order, kept as frame 0) or a file name or stem in each "
+            "folder (default: the file named reference, ref, background or no_contact).",
+        ),
+    ] = None,
+    px_per_mm: Annotated[
+        float | None,
+        typer.Option(
+            "--px-per-mm", min=0.0, metavar="PX",
+            help="Image folders: pixels per millimetre on the gel (DIGIT-like: 16), stored as "
+            "the sensor attribute px_per_mm for calibration and height maps.",
         ),
     ] = None,
     annotations: Annotated[
@@ -159,6 +178,8 @@ def ingest_command(
             height_px=height,
             sensor_name=sensor,
             frame_rate_hz=fps,
+            reference=reference,
+            px_per_mm=px_per_mm,
             annotations=annotations,
             trial_labels=trial_labels,
             skip_unknown=skip_unknown,

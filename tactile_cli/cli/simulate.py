@@ -322,3 +322,13 @@ def taxel_slip_command(
                    + f" hand+world), simulated in {summary['elapsed_s']:.1f} s")
 
     run_guarded(body, flags=FLAGS)
+
+
+# paper 002's scene lives in its own module (registered here, one insertion)
+from .simulate_digit_press import digit_press_command  # noqa: E402
+
+app.command("digit-press")(digit_press_command)
+
+from .simulate_avoidance import digit_avoidance_command  # noqa: E402
+
+app.command("digit-avoidance")(digit_avoidance_command)

@@ -49,6 +49,8 @@ class IngestOptions:
     annotations: Path | None = None  # CSV trial,start_s,end_s,label (see ingest.sidecars)
     trial_labels: Path | None = None  # CSV trial,<label>... (see ingest.sidecars)
     skip_unknown: bool = False  # AEDAT4: leave out streams of unknown type (else an error)
+    reference: str | None = None  # image folders: "first" or a file name (default: by name)
+    px_per_mm: float | None = None  # image folders: gel scale, stored as a sensor attribute
 
     def as_config(self) -> dict[str, Any]:
         out = asdict(self)

@@ -16,8 +16,19 @@ An input folder without frames whose subfolders are such folders (``digit/press_
   files are an error rather than silently skipped frames.
 - **Reference (no-contact) frame**: exactly one PNG/JPG whose name without suffix is, in
   any letter case, one of :data:`REFERENCE_STEMS` (``reference``, ``ref``, ``background``,
-  ``no_contact``); none or several is an error. :func:`scan_image_folder` also takes an
-  explicit reference file.
+  ``no_contact``); none or several is an error. ``reference`` (``tactile ingest
+  --reference``) changes that for every folder: ``first`` takes each folder's first frame
+  in natural order as its reference (the frame stays frame 0 of the sequence, so frames and
+  timestamps still match one to one: what a recording that starts before contact gives);
+  any other value names the reference file in each folder (``bg.png``, or its stem ``bg``,
+  any letter case), which is then not a frame. A folder that also holds a
+  reference-named file is an error either way (two candidates). :func:`scan_image_folder`
+  also takes an explicit reference file.
+- **Per-trial labels** (optional): ``labels.json`` in the folder, one JSON object of label
+  name -> string, number or boolean (``{"object": "cable", "slip": "slip",
+  "slip_onset_s": 1.5}``); the key ``split`` (``train``, ``val`` or ``test``) sets the
+  trial's split instead. The labels are set on the trial; ``--trial-labels`` and ``--label``
+  may add others but not contradict them (an error naming the file).
 - **Frame times** (``t_s``, seconds from the trial's time origin): from ``timestamps.csv``
   when present, either one column (``t_s``, one row per frame in frame order) or two
   columns (``file,t_s``); the header row is optional and ``t_s`` values are stored as
@@ -35,7 +46,10 @@ An input folder without frames whose subfolders are such folders (``digit/press_
   EXIF orientation tags are ignored: pixels are stored as encoded.
 
 All frames and reference frames of one ingest share one size, which becomes the sensor's
-``width_px``/``height_px`` (DIGIT: 320 x 240). Frames are decoded and written in small
+``width_px``/``height_px`` (DIGIT: 320 x 240; 640 x 480 and other sizes are read alike).
+``px_per_mm`` (``tactile ingest --px-per-mm``), the gel's scale in pixels per millimetre,
+becomes the sensor attribute ``px_per_mm`` that the visuotactile chain's calibration and
+height maps read (they refuse a file without it). Frames are decoded and written in small
 batches, so memory stays bounded for sequences of any length; every frame, reference and
 timestamps file is recorded as a source (``source_index`` of a trial lists its frames in
 order, then its reference, then its ``timestamps.csv`` if any).
@@ -64,6 +78,12 @@ DEFAULT_FRAME_RATE_HZ = 30.0
 REFERENCE_STEMS = ("reference", "ref", "background", "no_contact")
 #: Optional per-folder frame-time file.
 TIMESTAMPS_FILE = "timestamps.csv"
+#: Optional per-folder trial-label file (a JSON object of label name -> value).
+LABELS_FILE = "labels.json"
+#: ``reference`` value that takes each folder's first frame as its reference.
+REFERENCE_FIRST = "first"
+#: Splits a ``labels.json`` may set.
+SPLITS = ("train", "val", "test")
 #: Image files that are refused rather than skipped, so no frame is silently dropped.
 UNSUPPORTED_IMAGE_SUFFIXES = {".bmp", ".tif", ".tiff", ".gif", ".webp"}
 #: Target bytes of decoded frames held before one write to HDF5.
@@ -91,6 +111,9 @@ class ImageFolder:
     t_s: np.ndarray
     frame_rate_assumed_hz: float | None
     time_origin_unix_s: float | None = None
+    labels_file: Path | None = None
+    labels: tuple[tuple[str, str | int | float], ...] = ()
+    split: str | None = None
 
     @property
     def trial_name(self) -> str:
@@ -137,11 +160,14 @@ def scan_image_folder(
     *,
     reference: Path | None = None,
     frame_rate_hz: float | None = None,
+    reference_name: str | None = None,
 ) -> ImageFolder:
     """List a trial folder's frames, find its reference frame and settle the frame times.
 
     reference: an explicit no-contact frame file (then the folder must not hold a
     reference-named file too); by default it is found by name (:data:`REFERENCE_STEMS`).
+    reference_name: ``"first"`` (the first frame, which stays a frame) or the name or stem
+    of the reference file in this folder (see the module docstring).
     frame_rate_hz: the rate of evenly spaced frames in Hz, for folders without
     ``timestamps.csv`` (giving both is an error); by default
     :data:`DEFAULT_FRAME_RATE_HZ` is assumed and recorded as assumed.
@@ -154,6 +180,7 @@ def scan_image_folder(
         raise InputError(f"`frame_rate_hz` (={frame_rate_hz}) must be a positive number of Hz")
     images: list[Path] = []
     timestamps: list[Path] = []
+    label_files: list[Path] = []
     for path in folder.iterdir():
         if path.name.startswith(".") or not path.is_file():
             continue
@@ -165,11 +192,17 @@ def scan_image_folder(
                              "the sequence to PNG (lossless) or move the file out", path=path)
         elif path.name.lower() == TIMESTAMPS_FILE:
             timestamps.append(path)
+        elif path.name.lower() == LABELS_FILE:
+            label_files.append(path)
     named_refs = sorted((p for p in images if p.stem.lower() in REFERENCE_STEMS),
                         key=lambda p: natural_key(p.name))
     frames = tuple(sorted((p for p in images if p.stem.lower() not in REFERENCE_STEMS),
                           key=lambda p: natural_key(p.name)))
-    if reference is not None:
+    if reference is not None and reference_name is not None:
+        raise InputError("give a reference file or `reference`, not both", path=folder)
+    if reference_name is not None:
+        frames, ref = _pick_reference(folder, images, named_refs, frames, reference_name)
+    elif reference is not None:
         if named_refs:
             raise InputError(f"a reference frame was given ({reference}) and the folder holds "
                              f"{named_refs[0].name} too; keep one of them", path=folder)
@@ -204,8 +237,82 @@ def scan_image_folder(
         rate = DEFAULT_FRAME_RATE_HZ if frame_rate_hz is None else float(frame_rate_hz)
         assumed = rate if frame_rate_hz is None else None
         t_s = np.arange(len(frames), dtype=np.float64) / rate
+    if len(label_files) > 1:
+        raise InputError(f"several label files ({', '.join(p.name for p in label_files)}); "
+                         f"keep one named {LABELS_FILE}", path=folder)
+    labels_file = label_files[0] if label_files else None
+    labels, split = read_folder_labels(labels_file) if labels_file else ((), None)
     return ImageFolder(folder=folder, frames=frames, reference=ref, timestamps_file=ts_file,
-                       t_s=t_s, frame_rate_assumed_hz=assumed, time_origin_unix_s=origin)
+                       t_s=t_s, frame_rate_assumed_hz=assumed, time_origin_unix_s=origin,
+                       labels_file=labels_file, labels=labels, split=split)
+
+
+def _pick_reference(folder: Path, images: list[Path], named_refs: list[Path],
+                    frames: tuple[Path, ...], reference_name: str
+                    ) -> tuple[tuple[Path, ...], Path]:
+    """(frames, reference) for ``reference_name`` = ``first`` or a file name/stem."""
+    if reference_name == REFERENCE_FIRST:
+        if named_refs:
+            raise InputError(f"`reference='first'` was given and the folder holds "
+                             f"{named_refs[0].name} too; drop `reference` to use that file, or "
+                             "move it out", path=folder)
+        if not frames:
+            raise InputError("has no PNG/JPG frames, so there is no first frame to take as "
+                             "the reference", path=folder)
+        return frames, frames[0]
+    wanted = reference_name.casefold()
+    matches = sorted((p for p in images if wanted in (p.name.casefold(), p.stem.casefold())),
+                     key=lambda p: natural_key(p.name))
+    if not matches:
+        raise InputError(f"no reference frame named {reference_name!r} (`reference`); name a "
+                         "PNG/JPG file in every folder, or use `reference='first'`", path=folder)
+    if len(matches) > 1:
+        raise InputError(f"several files match `reference` {reference_name!r} "
+                         f"({', '.join(p.name for p in matches)}); give the full file name",
+                         path=folder)
+    ref = matches[0]
+    others = [p for p in named_refs if p != ref]
+    if others:
+        raise InputError(f"`reference` names {ref.name} and the folder holds {others[0].name} "
+                         "too; keep one of them", path=folder)
+    return tuple(p for p in frames if p != ref), ref
+
+
+def read_folder_labels(path: Path) -> tuple[tuple[tuple[str, str | int | float], ...],
+                                            str | None]:
+    """The labels and split of a trial folder's ``labels.json``: one JSON object of label
+    name -> string, number or boolean (stored as 0/1); key ``split`` sets the trial's split.
+    Every problem is an InputError naming the file."""
+    import json
+
+    try:
+        raw = json.loads(read_text(path, "label file"))
+    except json.JSONDecodeError as exc:
+        raise InputError(f"is not valid JSON ({exc.msg}); write one object like "
+                         '{"object": "cable", "slip_onset_s": 1.5}', path=path,
+                         where=f"line {exc.lineno}") from None
+    if not isinstance(raw, dict):
+        raise InputError(f"holds a JSON {type(raw).__name__}, expected one object of label "
+                         'name -> value like {"object": "cable"}', path=path)
+    labels: list[tuple[str, str | int | float]] = []
+    split: str | None = None
+    for key, value in raw.items():
+        if not key.strip():
+            raise InputError("has an empty label name", path=path)
+        if key == "split":
+            if value not in SPLITS:
+                raise InputError(f"split {value!r} is not one of {', '.join(SPLITS)}", path=path)
+            split = value
+            continue
+        if isinstance(value, bool):
+            value = int(value)
+        if isinstance(value, float) and not np.isfinite(value):
+            raise InputError(f"label {key!r} is not finite", path=path)
+        if not isinstance(value, str | int | float):
+            raise InputError(f"label {key!r} is a JSON {type(value).__name__}; a label is a "
+                             "string, a number or true/false", path=path)
+        labels.append((key.strip(), value))
+    return tuple(labels), split
 
 
 @dataclass(frozen=True)
@@ -348,7 +455,13 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
     # a folder with neither frames nor sequence folders is scanned as it is, for its error
     trial_folders = [f for p in inputs for f in ((image_sequence_folders(p) or [p])
                                                  if p.is_dir() else [p])]
-    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz) for p in trial_folders]
+    px_per_mm = getattr(options, "px_per_mm", None)
+    if px_per_mm is not None and not (np.isfinite(px_per_mm) and px_per_mm > 0):
+        raise InputError(f"`px_per_mm` (={px_per_mm}) must be a positive number of pixels per "
+                         "millimetre")
+    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz,
+                                 reference_name=getattr(options, "reference", None))
+               for p in trial_folders]
     first_ref = folders[0].reference
     reference0 = load_rgb(first_ref)
     size_hw = (int(reference0.shape[0]), int(reference0.shape[1]))
@@ -361,7 +474,8 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
     sensor = writer.add_sensor(
         options.sensor_name or "visuotactile", kind="visuotactile",
         sample_rate_hz=nominal_frame_rate_hz(folders), width_px=size_hw[1], height_px=size_hw[0],
-        description="visuotactile camera frames ingested from image-sequence folders")
+        description="visuotactile camera frames ingested from image-sequence folders",
+        px_per_mm=None if px_per_mm is None else float(px_per_mm))
     progress.start(sum(len(f.frames) for f in folders), "frames")
     for folder in folders:
         _write_trial(folder, writer, sensor, size_hw, first_ref, progress)
@@ -398,6 +512,10 @@ def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw:
     if folder.time_origin_unix_s is not None:
         extra["time_origin_unix_s"] = folder.time_origin_unix_s
     trial = writer.trial(folder.trial_name, **extra)
+    if folder.labels:
+        trial.set_labels(**dict(folder.labels))
+    if folder.split is not None:
+        trial.set_split(folder.split)
     appender = trial.frames(sensor, reference=reference)
     n_batch = max(1, min(len(folder.frames), FRAME_BATCH_BYTES // reference.nbytes))
     batch = np.empty((n_batch, *reference.shape), dtype=np.uint8)
@@ -417,6 +535,8 @@ def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw:
     sources.append(writer.add_source(folder.reference))
     if folder.timestamps_file is not None:
         sources.append(writer.add_source(folder.timestamps_file))
+    if folder.labels_file is not None:
+        sources.append(writer.add_source(folder.labels_file))
     # set after streaming: the writer's trial() takes sources up front, which would mean
     # hashing every frame before the first one is decoded
     trial.set_sources(sources)
@@ -430,6 +550,9 @@ __all__ = [
     "image_sequence_folders",
     "REFERENCE_STEMS",
     "TIMESTAMPS_FILE",
+    "LABELS_FILE",
+    "REFERENCE_FIRST",
+    "read_folder_labels",
     "ImageFolder",
     "ingest_image_sequence",
     "load_rgb",

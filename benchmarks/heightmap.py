@@ -1,0 +1,267 @@
+"""Frame -> height map speed (MLP normals + eq. 9 + Poisson) against a sparse-solver
+baseline, and the height RMSE, at 320x240 (DIGIT) and 640x480 (GelSight).
+
+Issue 16, item 4. One run measures, on the same frames and the same machine:
+
+- ``tactile``: :class:`tactile_cli.visuotactile.heightmap.HeightMapper` (folded float32
+  MLP in cache-sized tiles, eq. 9, DST-I Poisson solve on an FFT-friendly padded grid);
+- ``baseline``: the same MLP and eq. 9, then the same 5-point Poisson system (same padded
+  grid, same right-hand side) solved by ``scipy.sparse.linalg.spsolve`` (matrix built once,
+  outside the timing); ``splu`` (factorised once, one triangular solve per frame) is
+  reported beside it as the strongest sparse variant;
+- the network and the solver alone, and the opt-in ``skip_below`` (flat pixels skipped)
+  with its RMSE cost.
+
+Frames: with ``--scene FILE --truth DIR --model RUN`` (an ingested ``tactile simulate
+digit-press`` trials file, its ``truth/`` folder, a run trained on another seed's
+calibration presses) the timed frames are the scene's and the RMSE is against its truth.
+Without them, ball presses rendered by the tests' factory (``tests/factories/gel_frames``)
+with a small network trained on the factory's presses (seed 0; timed frames seed 1).
+640x480 frames are always factory presses (timing; RMSE only where the model was trained
+on that size, so it is left out there).
+
+    .venv/bin/python benchmarks/heightmap.py [--scene trials.h5 --truth DIR --model RUN]
+        [--frames 30] [--json]
+
+JSON keys: tactile_ms_per_frame, baseline_ms_per_frame, ratio, height_rmse_mm (320x240),
+plus per-size details and the load average before and after.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+
+def _laplacian(rows: int, cols: int):  # type: ignore[no-untyped-def]
+    import scipy.sparse as sp
+
+    def d2(n: int):  # type: ignore[no-untyped-def]
+        return sp.diags([np.ones(n - 1), -2 * np.ones(n), np.ones(n - 1)], [-1, 0, 1])
+
+    return (sp.kron(sp.identity(rows), d2(cols)) + sp.kron(d2(rows), sp.identity(cols))).tocsc()
+
+
+def _timed(fn, items, repeat: int = 1) -> tuple[float, list]:  # type: ignore[no-untyped-def]
+    fn(items[0])  # warm-up (caches, FFT plans)
+    out = []
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        out = [fn(x) for x in items]
+    return 1e3 * (time.perf_counter() - t0) / (repeat * len(items)), out
+
+
+def factory_frames(shape: tuple[int, int], n: int, seed: int, px_per_mm: float
+                   ) -> tuple[list[np.ndarray], np.ndarray, list[np.ndarray]]:
+    from tests.factories.gel_frames import shade, sphere_cap
+
+    rng = np.random.default_rng(seed)
+    h, w = shape
+    ref = shade(np.zeros(shape), px_per_mm=px_per_mm, noise_std=1.0, rng=rng)
+    truths, frames = [], []
+    for _ in range(n):
+        cap = sphere_cap(shape, (rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h),
+                         rng.uniform(2.0, 4.0), rng.uniform(0.3, 0.8), px_per_mm)
+        truths.append(cap.astype(np.float32))
+        frames.append(shade(cap, px_per_mm=px_per_mm, noise_std=1.0, rng=rng))
+    return frames, ref, truths
+
+
+def factory_model(work: Path, shape: tuple[int, int], px_per_mm: float) -> Path:
+    """A normal network trained on factory presses of ``shape`` (seed 0)."""
+    import yaml
+
+    from tactile_cli.learn import parse_config, train
+    from tactile_cli.store import StoreWriter
+    from tests.factories.gel_frames import TRAIN_YAML, normals_of, shade, sphere_cap
+
+    rng = np.random.default_rng(0)
+    h, w = shape
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    ref = shade(np.zeros(shape), px_per_mm=px_per_mm, noise_std=1.0, rng=rng)
+    table = work / "pixels.h5"
+    with StoreWriter(table, command="benchmarks/heightmap.py") as wr:
+        s = wr.add_sensor("pixels", kind="visuotactile", sample_rate_hz=1000.0, width_px=w,
+                          height_px=h, channel_names=["x", "y", "dR", "dG", "dB"],
+                          channel_units=["px", "px", "", "", ""])
+        for i in range(8):
+            cap = sphere_cap(shape, (rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h),
+                             rng.uniform(2.0, 4.0), rng.uniform(0.3, 0.8), px_per_mm)
+            frame = shade(cap, px_per_mm=px_per_mm, noise_std=1.0, rng=rng)
+            diff = (frame.astype(np.float32) - ref).reshape(-1, 3)
+            n = normals_of(cap, px_per_mm).reshape(-1, 3)
+            keep = (np.abs(cap.ravel()) > 0) | (rng.random(h * w) < 0.1)
+            data = np.c_[xx.ravel(), yy.ravel(), diff][keep]
+            t = wr.trial(f"ball_{i:02d}")
+            t.write_signal("pixels", sensor=s, data=data,
+                           t_s=np.arange(keep.sum(), dtype=np.float64) * 1e-3,
+                           sample_labels={k: (n[keep, j].astype(np.float32), None)
+                                          for j, k in enumerate(("nx", "ny", "nz"))})
+        wr.commit()
+    cfg = yaml.safe_load(TRAIN_YAML)
+    cfg["optim"]["epochs"] = 8
+    out = work / "run"
+    train(parse_config(cfg), [table], out)
+    return out
+
+
+def scene_frames(path: Path, truth: Path, n: int) -> tuple[list[np.ndarray], list[np.ndarray],
+                                                           list[np.ndarray], float]:
+    """Up to ``n`` frames spread over the scene's trials, their references and truths."""
+    from tactile_cli.store.trials import TactileFile
+    from tactile_cli.visuotactile.heightmap import frame_trials, frames_px_per_mm, load_truth
+
+    frames, refs, truths = [], [], []
+    with TactileFile(path) as tf:
+        trials = frame_trials(tf)
+        ppm = frames_px_per_mm(tf, trials[0], None)
+        per = max(1, -(-n // len(trials)))
+        for t in trials:
+            fr = t.frames()
+            true = load_truth(truth, t.name, (len(fr), *fr.shape[:2]))
+            for k in np.linspace(0, len(fr) - 1, per).astype(int):
+                frames.append(fr[int(k)])
+                refs.append(fr.reference)
+                truths.append(true[int(k)])
+            if len(frames) >= n:
+                break
+    return frames[:n], refs[:n], truths[:n], ppm
+
+
+def measure(model, frames, refs, truths, ppm: float, *, rmse: bool,  # type: ignore[no-untyped-def]
+            baseline: bool = True) -> dict:
+    import scipy.sparse.linalg as spla
+
+    from tactile_cli.visuotactile.heightmap import HeightMapper
+    from tactile_cli.visuotactile.poisson import gradients_from_normals
+
+    h, w = frames[0].shape[:2]
+    mapper = HeightMapper(model, ppm)
+    solver = mapper.solver(h, w)
+    items = list(zip(frames, refs, strict=True))
+    res: dict = {"size": f"{w}x{h}", "n_frames": len(frames), "workers": mapper.workers,
+                 "padded_grid": f"{solver.cols}x{solver.rows}"}
+    res["tactile_ms_per_frame"], heights = _timed(lambda x: mapper(*x), items, repeat=2)
+    res["mlp_ms_per_frame"], normals = _timed(lambda x: mapper.normals(*x), items)
+    grads = [gradients_from_normals(n, nz_floor=mapper.nz_floor) for n in normals]
+    res["poisson_dst_ms_per_frame"], _ = _timed(lambda g: solver.integrate(*g), grads, repeat=3)
+    if rmse:
+        err = np.concatenate([(a - b).ravel() for a, b in zip(heights, truths, strict=True)])
+        res["height_rmse_mm"] = float(np.sqrt(np.mean(err.astype(np.float64) ** 2)))
+        res["peak_mm"] = [float(a.max()) for a in heights[:5]]
+        res["true_peak_mm"] = [float(b.max()) for b in truths[:5]]
+    if baseline:
+        lap = _laplacian(solver.rows, solver.cols)
+
+        def sparse_solve(g: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+            f = solver.divergence(*g).astype(np.float64)
+            u = spla.spsolve(lap, f.ravel()).reshape(solver.rows, solver.cols)
+            return u[solver.top:solver.top + h, solver.left:solver.left + w]
+
+        n_base = min(len(grads), 5)  # spsolve refactorises per frame: slow, a few suffice
+        res["spsolve_ms_per_frame"], base = _timed(sparse_solve, grads[:n_base])
+        lu = spla.splu(lap)
+
+        def lu_solve(g: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+            return lu.solve(solver.divergence(*g).astype(np.float64).ravel())
+
+        res["splu_solve_ms_per_frame"], _ = _timed(lu_solve, grads[:n_base])
+        dst = [solver.integrate(*g) for g in grads[:n_base]]
+        res["max_abs_diff_dst_vs_spsolve_mm"] = float(max(
+            np.abs(a.astype(np.float64) - b).max() for a, b in zip(dst, base, strict=True)))
+        res["baseline_ms_per_frame"] = res["mlp_ms_per_frame"] + res["spsolve_ms_per_frame"]
+        res["baseline_splu_ms_per_frame"] = (res["mlp_ms_per_frame"]
+                                             + res["splu_solve_ms_per_frame"])
+        res["ratio"] = res["baseline_ms_per_frame"] / res["tactile_ms_per_frame"]
+        res["ratio_vs_splu"] = res["baseline_splu_ms_per_frame"] / res["tactile_ms_per_frame"]
+    return res
+
+
+def skip_study(model, frames, refs, truths, ppm: float, levels: list[float]) -> list[dict]:  # type: ignore[no-untyped-def]
+    from tactile_cli.visuotactile.heightmap import HeightMapper
+
+    rows = []
+    items = list(zip(frames, refs, strict=True))
+    for level in levels:
+        mapper = HeightMapper(model, ppm, skip_below=level)
+        ms, heights = _timed(lambda x, m=mapper: m(*x), items, repeat=2)
+        err = np.concatenate([(a - b).ravel() for a, b in zip(heights, truths, strict=True)])
+        rows.append({"skip_below": level, "ms_per_frame": ms,
+                     "height_rmse_mm": float(np.sqrt(np.mean(err.astype(np.float64) ** 2)))})
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", type=Path, help="ingested digit-press trials file")
+    ap.add_argument("--truth", type=Path, help="the scene's truth/ folder")
+    ap.add_argument("--model", type=Path, help="normal-network run folder")
+    ap.add_argument("--frames", type=int, default=30)
+    ap.add_argument("--skip-levels", type=float, nargs="*", default=[2.0, 4.0, 8.0])
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+
+    from tactile_cli.visuotactile.normals import NormalModel
+
+    load_before = os.getloadavg()
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        if args.scene is not None:
+            if args.truth is None or args.model is None:
+                ap.error("--scene needs --truth and --model")
+            frames, refs, truths, ppm = scene_frames(args.scene, args.truth, args.frames)
+            run = args.model
+            source = f"scene {args.scene}"
+        else:
+            ppm = 16.0
+            run = args.model or factory_model(work, (240, 320), ppm)
+            frames, ref, truths = factory_frames((240, 320), args.frames, 1, ppm)
+            refs = [ref] * len(frames)
+            source = "factory ball presses (tests/factories/gel_frames), seed 1"
+        model = NormalModel.from_run(run)
+        small = measure(model, frames, refs, truths, ppm, rmse=True)
+        skips = skip_study(model, frames, refs, truths, ppm, args.skip_levels)
+        big_frames, big_ref, big_truth = factory_frames((480, 640), min(args.frames, 10), 2, ppm)
+        big = measure(model, big_frames, [big_ref] * len(big_frames), big_truth, ppm,
+                      rmse=False)
+    load_after = os.getloadavg()
+    out = {
+        "tactile_ms_per_frame": small["tactile_ms_per_frame"],
+        "baseline_ms_per_frame": small["baseline_ms_per_frame"],
+        "ratio": small["ratio"],
+        "height_rmse_mm": small["height_rmse_mm"],
+        "frames": source, "model": str(args.model or "factory-trained (seed 0)"),
+        "320x240": small, "640x480": big, "skip_below": skips,
+        "load_before": load_before, "load_after": load_after, "cpus": os.cpu_count(),
+        "target_ms_per_frame": 5.0, "target_ratio": 10.0,
+    }
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return
+    for key in ("320x240", "640x480"):
+        r = out[key]
+        print(f"{key}: tactile {r['tactile_ms_per_frame']:.2f} ms/frame (MLP "
+              f"{r['mlp_ms_per_frame']:.2f}, DST Poisson {r['poisson_dst_ms_per_frame']:.2f} on "
+              f"{r['padded_grid']}); baseline MLP + spsolve {r['baseline_ms_per_frame']:.1f} "
+              f"ms (ratio {r['ratio']:.1f}x), MLP + splu solve "
+              f"{r['baseline_splu_ms_per_frame']:.1f} ms ({r['ratio_vs_splu']:.2f}x); DST vs "
+              f"spsolve max diff {r['max_abs_diff_dst_vs_spsolve_mm']:.1e} mm")
+    print(f"height RMSE {out['height_rmse_mm']:.4f} mm on {source}")
+    for s in skips:
+        print(f"  skip_below {s['skip_below']:g}: {s['ms_per_frame']:.2f} ms/frame, RMSE "
+              f"{s['height_rmse_mm']:.4f} mm")
+    print(f"load average before {load_before}, after {load_after}; {os.cpu_count()} CPUs")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,105 @@
+"""`tactile heightmap FILE --model RUN --out FILE`: height maps of every frame (paper 002,
+sec. II-B, eq. 9 and the Poisson integration; Fig. 2)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import Flag, run_guarded
+from .progress import RichProgress
+
+FLAGS: dict[str, Flag] = {"run_dir": "--model", "out": "--out", "truth_dir": "--truth",
+                          "px_per_mm": "--px-per-mm", "skip_below": "--skip-below",
+                          "workers": "--workers", "trials": "--trial", "plot": "--plot",
+                          "overwrite": "--overwrite"}
+
+
+def heightmap_command(
+    file: Annotated[Path, typer.Argument(help="Tactile HDF5 file with frames (an ingested "
+                                         "image sequence).", metavar="FILE",
+                                         show_default=False)],
+    model: Annotated[Path, typer.Option("--model", help="Run folder of the normal network "
+                                        "(tactile train configs/train_mlp_normals.yaml).",
+                                        metavar="RUN", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output HDF5 file: stream "
+                                      "height_mm per trial.", metavar="FILE",
+                                      show_default=False)],
+    truth: Annotated[Path | None, typer.Option("--truth", help="A scene's truth/ folder "
+                                               "(tactile simulate digit-press): report the "
+                                               "height RMSE.", metavar="FOLDER",
+                                               show_default=False)] = None,
+    px_per_mm: Annotated[float | None, typer.Option(
+        "--px-per-mm", help="Gel scale; default: the frames sensor's px_per_mm attribute.",
+        show_default=False)] = None,
+    skip_below: Annotated[float | None, typer.Option(
+        "--skip-below", help="Take pixels whose colour differs from the reference by less "
+        "than this (0-255, every channel) as flat without running the network (faster; see "
+        "benchmarks/heightmap.py for its RMSE cost). Default: off.", show_default=False)] = None,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", min=1, help="Threads (default: the usable CPUs, at most 8).",
+        show_default=False)] = None,
+    trial: Annotated[list[str] | None, typer.Option(
+        "--trial", "-t", help="Trial to process; repeatable (default: every trial with "
+        "frames).", metavar="TRIAL", show_default=False)] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Folder for one Fig. 2-style PNG per trial (the frame of largest "
+        "height: image and 3-D height map).", metavar="FOLDER", show_default=False)] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing output.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
+        "terminal).", show_default=False)] = None,
+) -> None:
+    """Height maps (mm) of every frame: the MLP's surface normals per pixel, gradients by
+    eq. 9 and a DST Poisson solve; written as a new tactile HDF5 file (stream height_mm
+    per trial, the model run in its provenance). With --truth, the height RMSE."""
+
+    def body() -> None:
+        from ..store.outdir import check_output_folder, output_folder
+        from ..store.writer import current_command
+        from ..visuotactile.heightmap import heightmap_file
+
+        if not file.exists():
+            raise InputError("file not found", path=file)
+        if truth is not None and not truth.is_dir():
+            raise InputError("truth folder not found (give a scene's truth/ folder)",
+                             path=truth)
+        if plot is not None:
+            check_output_folder(plot, merge=True)
+        keep: dict | None = {} if plot is not None else None
+        with RichProgress(enabled=progress) as bar:
+            result = heightmap_file(file, model, out, truth_dir=truth, px_per_mm=px_per_mm,
+                                    skip_below=skip_below, workers=workers, trials=trial,
+                                    overwrite=overwrite, command=current_command(),
+                                    progress=bar, keep=keep)
+        if plot is not None and keep is not None:
+            from ..store.trials import TactileFile
+            from ..visuotactile.heightmap import load_truth
+            from ..visuotactile.plots import height_figure
+
+            with TactileFile(file) as tf, output_folder(plot, merge=True) as tmp:
+                for name, heights in keep.items():
+                    k = int(heights.reshape(len(heights), -1).max(axis=1).argmax())
+                    true = (load_truth(truth, name, heights.shape)[k] if truth is not None
+                            else None)
+                    height_figure(tf.trial(name).frames()[k], heights[k], result.px_per_mm,
+                                  tmp / f"height_{name}.png", truth_mm=true,
+                                  title=f"{name}, frame {k}")
+        if as_json:
+            typer.echo(json.dumps(result.as_dict(), indent=2))
+            return
+        typer.echo(f"wrote {out}: {sum(t.n_frames for t in result.trials)} height maps of "
+                   f"{len(result.trials)} trial(s), {result.ms_per_frame:.1f} ms per frame "
+                   f"(reading and writing included), px_per_mm {result.px_per_mm:g}")
+        if result.rmse_mm is not None:
+            typer.echo(f"height RMSE vs truth: {result.rmse_mm:.4f} mm over all pixels, "
+                       f"{result.rmse_contact_mm:.4f} mm over contact pixels")
+        if plot is not None:
+            typer.echo(f"wrote {plot}/height_*.png")
+
+    run_guarded(body, flags=FLAGS)

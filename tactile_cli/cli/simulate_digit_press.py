@@ -1,0 +1,119 @@
+"""`tactile simulate digit-press OUT`: the DIGIT-like scene of paper 002 (registered in
+``cli/simulate.py``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from ._errors import Flag, run_guarded
+from .progress import RichProgress
+
+FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite"}
+
+
+def digit_press_command(
+    out_arg: Annotated[
+        Path | None, typer.Argument(help="Output folder (created).", metavar="FOLDER",
+                                    show_default=False)
+    ] = None,
+    out: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Output folder (same as OUT).",
+                                  metavar="FOLDER", show_default=False)
+    ] = None,
+    config: Annotated[
+        Path | None,
+        typer.Option("--config", "-c", help="Scene config YAML; default: the built-in "
+                     "defaults, which configs/scene_digit_press.yaml repeats.",
+                     metavar="CONFIG"),
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte "
+                                      "and this unit's lighting.")] = 0,
+    calibration_presses: Annotated[
+        int | None, typer.Option("--calibration-presses", min=0,
+                                 help="Override calibration.presses (ball-bearing presses).")
+    ] = None,
+    trials: Annotated[
+        int | None, typer.Option("--trials", min=0, help="Override trials.per_object: trials "
+                                 "per object (the first holds still, the others slip; 0: "
+                                 "calibration presses only).")
+    ] = None,
+    objects: Annotated[
+        str | None, typer.Option("--objects", help="Override trials.objects, comma-separated "
+                                 "(cable, box, fabric, hex_key_small, hex_key_medium, "
+                                 "hex_key_large).", metavar="NAMES")
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option(help="Replace an existing non-empty output folder.")
+    ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress",
+                     help="Show a progress bar (default: when stderr is a terminal).",
+                     show_default=False),
+    ] = None,
+) -> None:
+    """Simulate paper 002's DIGIT: ball-bearing calibration presses and objects (cable, box
+    face, fabric, hex keys) held for >= 1.2 s and then slipping (+x, -x, +y, -y, z, rot) or
+    held still, as 320x240 RGB frames under uneven, position-dependent LED lighting with
+    camera noise; the height maps behind every frame are stored.
+
+    Writes OUT/calibration/ball_NN/ and OUT/trials/<object>_NN/ (reference.png,
+    frame_0000.png ..., trials also timestamps.csv at 30 Hz), OUT/calibration_labels.csv,
+    OUT/trial_labels.csv (object, slip, direction, slip_onset_s), OUT/truth/<trial>.npz
+    (height_mm per frame) and OUT/scene.json.
+
+    Ingest: tactile ingest OUT/calibration --trial-labels OUT/calibration_labels.csv
+    --px-per-mm 16 --out calib.h5 (and the same for OUT/trials with OUT/trial_labels.csv);
+    then tactile normal-labels calib.h5 --out pixels.h5.
+    """
+
+    def body() -> None:
+        from ..visuotactile.config import SceneConfig, load_scene_config
+        from ..visuotactile.simulate import simulate_digit_press
+
+        if (out_arg is None) == (out is None):
+            raise InputError("give the output folder once: OUT or --out"
+                             + (", not both" if out_arg is not None else ""))
+        target = out_arg if out_arg is not None else out
+        assert target is not None
+        cfg = load_scene_config(config) if config is not None else SceneConfig()
+        if calibration_presses is not None or trials is not None or objects is not None:
+            names = None if objects is None else [s.strip() for s in objects.split(",")
+                                                  if s.strip()]
+            if names is not None:
+                from ..visuotactile.shapes import OBJECT_NAMES
+
+                unknown = [n for n in names if n not in OBJECT_NAMES]
+                if unknown or not names:
+                    raise InputError(f"--objects {objects!r}: "
+                                     + (f"{unknown[0]!r} is not" if unknown else "name")
+                                     + f" one of {', '.join(OBJECT_NAMES)}")
+            try:
+                cfg = cfg.with_overrides(presses=calibration_presses, per_object=trials,
+                                         objects=names)
+            except ValueError as exc:
+                lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+                raise InputError(f"--objects/--trials/--calibration-presses: "
+                                 f"{lines[1] if len(lines) > 1 else lines[0]}"
+                                 + (f" ({lines[2]})" if len(lines) > 2 else "")) from None
+        with RichProgress(enabled=progress) as bar:
+            result = simulate_digit_press(cfg, target, seed=seed, progress=bar,
+                                          overwrite=overwrite)
+        summary = result.as_dict()
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+            return
+        typer.echo(f"digit-press -> {result.out_dir} (seed {result.seed}): "
+                   f"{summary['n_calibration_presses']} calibration presses, "
+                   f"{summary['n_trials']} trials ({summary['n_slip']} slipping), "
+                   f"{summary['n_frames']} frames, simulated in {summary['elapsed_s']:.1f} s")
+        for line in summary["ingest"]:
+            typer.echo(f"  then: {line}")
+
+    run_guarded(body, flags=FLAGS)

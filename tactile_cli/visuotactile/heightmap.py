@@ -1,0 +1,288 @@
+"""Height maps of a visuotactile recording (paper 002, sec. II-B, Fig. 2).
+
+Per frame: the normal model (:mod:`.normals`) predicts a unit normal per pixel from the
+frame and its no-contact reference, eq. 9 turns normals into gradients and the DST
+Poisson solver (:mod:`.poisson`) integrates them into heights in mm
+(:class:`HeightMapper`). :func:`heightmap_file` does it for every trial of an ingested
+file and writes a new tactile HDF5 file.
+
+Output layout (no schema change: a sampled stream holds any per-frame vector). Per trial
+the stream ``height_mm``, data (n_frames, H * W) float32 mm, row-major (row 0 first),
+``t_s`` the frame times; sensor ``heightmap`` (kind ``visuotactile``, ``width_px``,
+``height_px``, ``px_per_mm``, the frame rate; channels ``r<row>c<col>`` in unit mm).
+:func:`read_height_maps` gives them back as (n_frames, H, W). Trial labels, splits and
+annotations are copied; the provenance lists the input file and the model run's
+``model.pt`` (SHA-256), and the config records the run folder.
+
+Skipping flat pixels (``skip_below``): pixels whose colour differs from the reference by
+less than ``skip_below`` (0-255 units, every channel) are taken as flat (normal
+(0, 0, 1)) without running the network. Off by default; its cost in height RMSE is
+measured next to its speed by ``benchmarks/heightmap.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..interrupt import raise_if_requested
+from ..progress import NullProgress, Progress
+from ..store import StoreWriter
+from ..store.trials import TactileFile, Trial
+from .normals import NormalModel, default_workers
+from .poisson import NZ_FLOOR, PoissonSolver, gradients_from_normals
+
+STREAM = "height_mm"
+SENSOR = "heightmap"
+
+
+@dataclass
+class HeightMapper:
+    """Frame -> height map. model: a :class:`NormalModel`; px_per_mm: the gel's scale;
+    workers: threads (network tiles and FFTs); skip_below: see the module docstring
+    (None: off); nz_floor: eq. 9's floor on nz."""
+
+    model: NormalModel
+    px_per_mm: float
+    workers: int = field(default_factory=default_workers)
+    skip_below: float | None = None
+    nz_floor: float = NZ_FLOOR
+    _solvers: dict[tuple[int, int], PoissonSolver] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.px_per_mm) and self.px_per_mm > 0):
+            raise InputError(f"`px_per_mm` (={self.px_per_mm}) must be a positive number")
+        if self.skip_below is not None and not (np.isfinite(self.skip_below)
+                                                and self.skip_below >= 0):
+            raise InputError(f"`skip_below` (={self.skip_below}) must be >= 0 colour units")
+
+    def solver(self, height: int, width: int) -> PoissonSolver:
+        key = (height, width)
+        if key not in self._solvers:
+            self._solvers[key] = PoissonSolver(height, width, self.px_per_mm,
+                                               workers=self.workers, dtype=np.float32)
+        return self._solvers[key]
+
+    def normals(self, frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """(H, W, 3) uint8 frame and reference -> (H, W, 3) float32 unit normals."""
+        if self.skip_below is None:
+            return self.model.predict(frame, reference, workers=self.workers)
+        diff = np.abs(frame.astype(np.int16) - reference.astype(np.int16)).max(axis=-1)
+        return self.model.predict(frame, reference, workers=self.workers,
+                                  active=diff >= self.skip_below)
+
+    def __call__(self, frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """(H, W, 3) uint8 frame and reference -> (H, W) float32 heights in mm."""
+        n = self.normals(frame, reference)
+        gx, gy = gradients_from_normals(n, nz_floor=self.nz_floor)
+        return self.solver(*n.shape[:2]).integrate(gx, gy)
+
+
+def frames_px_per_mm(tf: TactileFile, trial: Trial, px_per_mm: float | None) -> float:
+    """``px_per_mm`` if given, else the frames sensor's attribute; one InputError naming
+    the file otherwise."""
+    if px_per_mm is not None:
+        return float(px_per_mm)
+    name = trial.frames().sensor_name
+    value = tf.sensor(name).attrs.get("px_per_mm") if name in tf.sensor_names else None
+    if value is None:
+        raise InputError(f"sensor {name!r} has no px_per_mm attribute; ingest the images with "
+                         "`tactile ingest --px-per-mm` or pass `px_per_mm`", path=tf.path,
+                         where=f"/sensors/{name}")
+    return float(value)
+
+
+def frame_trials(tf: TactileFile) -> list[Trial]:
+    """Trials of ``tf`` that hold frames; InputError when none does."""
+    trials = [t for t in tf.trials() if t.has_frames]
+    if not trials:
+        raise InputError("no trial holds frames (an image sequence); ingest a visuotactile "
+                         "recording with `tactile ingest`", path=tf.path)
+    return trials
+
+
+def trial_heights(mapper: HeightMapper, trial: Trial) -> tuple[np.ndarray, np.ndarray]:
+    """(n_frames, H, W) float32 mm and (n_frames,) t_s of one trial's frames."""
+    frames = trial.frames()
+    ref = frames.reference
+    h, w = frames.shape[:2]
+    out = np.empty((len(frames), h, w), dtype=np.float32)
+    for k, (_, image) in enumerate(frames):
+        raise_if_requested()
+        out[k] = mapper(image, ref)
+    return out, frames.t_s
+
+
+def load_truth(truth_dir: Path, trial: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``truth_dir/<trial>.npz`` ``height_mm`` checked against ``shape``."""
+    path = Path(truth_dir) / f"{trial}.npz"
+    if not path.is_file():
+        raise InputError(f"no ground truth for trial {trial!r} (expected {path.name} from "
+                         "`tactile simulate digit-press`)", path=truth_dir)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            truth = np.asarray(z["height_mm"], dtype=np.float32)
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputError(f"not a truth file with height_mm ({str(exc).splitlines()[0]})",
+                         path=path) from None
+    if truth.shape != shape:
+        raise InputError(f"height_mm has shape {truth.shape}; the trial's height maps are "
+                         f"{shape}", path=path)
+    return truth
+
+
+@dataclass(frozen=True)
+class TrialHeights:
+    """One trial's summary: frames, largest height (mm), RMSE against the truth over all
+    pixels and over the truth's contact pixels (height > 0), mm (None without truth)."""
+
+    trial: str
+    n_frames: int
+    peak_mm: float
+    rmse_mm: float | None = None
+    rmse_contact_mm: float | None = None
+    true_peak_mm: float | None = None
+
+
+@dataclass(frozen=True)
+class HeightmapResult:
+    """What :func:`heightmap_file` wrote: the output, per-trial summaries, the overall
+    RMSE (root of the mean square over every pixel of every trial, mm) and the time spent
+    per frame (ms, reading included)."""
+
+    out: Path
+    trials: list[TrialHeights]
+    rmse_mm: float | None
+    rmse_contact_mm: float | None
+    ms_per_frame: float
+    px_per_mm: float
+    run_dir: str
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"out": str(self.out), "run": self.run_dir, "px_per_mm": self.px_per_mm,
+                "rmse_mm": self.rmse_mm, "rmse_contact_mm": self.rmse_contact_mm,
+                "ms_per_frame": self.ms_per_frame,
+                "trials": [t.__dict__ for t in self.trials]}
+
+
+def _rmse(sq: float, n: int) -> float | None:
+    return float(np.sqrt(sq / n)) if n else None
+
+
+def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
+                   truth_dir: str | Path | None = None, px_per_mm: float | None = None,
+                   skip_below: float | None = None, workers: int | None = None,
+                   trials: Sequence[str] | None = None, overwrite: bool = False,
+                   command: str | None = None, progress: Progress | None = None,
+                   keep: dict[str, np.ndarray] | None = None) -> HeightmapResult:
+    """Height maps of every frame of every trial with frames in ``path`` (or of
+    ``trials``), written to the new file ``out`` (see the module docstring). With
+    ``truth_dir`` (the scene's ``truth/``) the RMSE against the true heights is reported.
+    ``keep``, when given, receives trial -> (n_frames, H, W) heights (for figures)."""
+    import time
+
+    progress = progress or NullProgress()
+    model = NormalModel.from_run(run_dir)
+    run_path = Path(run_dir)
+    config = {"run": str(run_dir), "px_per_mm": px_per_mm, "skip_below": skip_below,
+              "truth": None if truth_dir is None else str(truth_dir),
+              "nz_floor": NZ_FLOOR, "input_kind": model.input_kind}
+    summaries: list[TrialHeights] = []
+    sq_all = sq_contact = 0.0
+    n_all = n_contact = 0
+    n_frames = 0
+    t0 = time.perf_counter()
+    with TactileFile(path) as tf:
+        chosen = frame_trials(tf)
+        if trials is not None:
+            chosen = tf.trials(list(trials))
+        scale = frames_px_per_mm(tf, chosen[0], px_per_mm)
+        mapper = HeightMapper(model, scale, skip_below=skip_below,
+                              workers=default_workers() if workers is None else workers)
+        with StoreWriter(out, command=command, config=config, overwrite=overwrite) as w:
+            source = w.add_source(path)
+            model_source = w.add_source(run_path / "model.pt")
+            progress.start(len(chosen), "height maps")
+            sensor = None
+            for trial in chosen:
+                if not trial.has_frames:
+                    raise InputError(f"trial {trial.name!r} holds no frames", path=tf.path)
+                heights, t_s = trial_heights(mapper, trial)
+                n, h, wd = heights.shape
+                if sensor is None:
+                    fr = trial.frames()
+                    src = (tf.sensor(fr.sensor_name) if fr.sensor_name in tf.sensor_names
+                           else None)
+                    rate = src.sample_rate_hz if src is not None else 0.0
+                    if not rate > 0:
+                        step = np.median(np.diff(t_s)) if n > 1 else 0.0
+                        rate = 1.0 / step if step > 0 else 30.0
+                    sensor = w.add_sensor(
+                        SENSOR, kind="visuotactile", sample_rate_hz=float(rate),
+                        channel_names=[f"r{r}c{c}" for r in range(h) for c in range(wd)],
+                        channel_units="mm", width_px=wd, height_px=h, px_per_mm=scale,
+                        description="height maps from the MLP normals and Poisson "
+                                    "integration (paper 002, sec. II-B); data row-major")
+                    shape = (h, wd)
+                elif (h, wd) != shape:
+                    raise InputError(f"trial {trial.name!r} has frames of {wd}x{h} px; earlier "
+                                     f"trials have {shape[1]}x{shape[0]}", path=tf.path)
+                if n > 1 and not (np.diff(t_s) > 0).all():
+                    raise InputError(f"trial {trial.name!r}: frame times repeat; a height "
+                                     "stream needs increasing times", path=tf.path,
+                                     where=f"{trial.where}/frames/t_s")
+                tw = w.trial(trial.name, labels=trial.labels, split=trial.split,
+                             sources=[source, model_source],
+                             annotations=[(a.start_s, a.end_s, a.label)
+                                          for a in trial.annotations])
+                tw.write_signal(STREAM, sensor=sensor, data=heights.reshape(n, -1), t_s=t_s)
+                summary = TrialHeights(trial.name, n, float(heights.max(initial=0.0)))
+                if truth_dir is not None:
+                    truth = load_truth(Path(truth_dir), trial.name, heights.shape)
+                    err = (heights - truth).astype(np.float64) ** 2
+                    contact = truth > 0
+                    sq_all += float(err.sum())
+                    n_all += err.size
+                    sq_contact += float(err[contact].sum())
+                    n_contact += int(contact.sum())
+                    summary = TrialHeights(trial.name, n, summary.peak_mm,
+                                           _rmse(float(err.sum()), err.size),
+                                           _rmse(float(err[contact].sum()),
+                                                 int(contact.sum())),
+                                           float(truth.max(initial=0.0)))
+                if keep is not None:
+                    keep[trial.name] = heights
+                summaries.append(summary)
+                n_frames += n
+                progress.advance()
+            w.commit()
+    elapsed = time.perf_counter() - t0
+    return HeightmapResult(Path(out), summaries, _rmse(sq_all, n_all),
+                           _rmse(sq_contact, n_contact),
+                           1e3 * elapsed / max(1, n_frames), scale, str(run_dir))
+
+
+def read_height_maps(trial: Trial) -> tuple[np.ndarray, np.ndarray, float]:
+    """A heightmap file's trial -> (n_frames, H, W) float32 mm, (n_frames,) t_s and the
+    sensor's px_per_mm; InputError naming the file when the trial has no such stream."""
+    if not trial.has_signal(STREAM):
+        raise InputError(f"trial {trial.name!r} has no {STREAM} stream; write one with "
+                         "`tactile heightmap`", path=trial.path, where=trial.where)
+    sig = trial.signal(STREAM)
+    h, w = sig.sensor.height_px, sig.sensor.width_px
+    if h is None or w is None or h * w != sig.data.shape[1]:
+        raise InputError(f"sensor {sig.sensor.name!r} has width_px x height_px {w}x{h}, not "
+                         f"the stream's {sig.data.shape[1]} values per frame",
+                         path=trial.path, where=sig.where)
+    return (sig.data.reshape(-1, h, w), sig.t_s,
+            float(sig.sensor.attrs.get("px_per_mm", float("nan"))))
+
+
+__all__ = ["SENSOR", "STREAM", "HeightMapper", "HeightmapResult", "TrialHeights",
+           "frame_trials", "frames_px_per_mm", "heightmap_file", "load_truth",
+           "read_height_maps", "trial_heights"]

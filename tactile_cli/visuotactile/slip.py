@@ -1,0 +1,409 @@
+"""The slip signal, its adaptive threshold and per-trial slip decisions (paper 002, eq. 10
+and sec. V).
+
+- :func:`slip_signal`: ``S_t = sum_i |h_t(i) - h_(t-1)(i)|`` over the ``n`` units of a
+  tactile mesh (:mod:`.mesh`), one value per frame; ``S_0`` is NaN (no previous frame).
+  Units: those of the maps (mm for height maps, 0-255 colour units for the intensity
+  source) summed over the units.
+- :func:`adaptive_threshold`: ``scale`` (2 in the paper) times the mean of the first
+  ``n_static`` (30: one second at 30 Hz) finite signal values, taken while the grip is
+  static.
+- :func:`detect_slip`: a frame after those static frames whose signal is *larger* than
+  the threshold (a signal equal to it is not a slip) is a slip; the first such frame is the
+  detection. :func:`score_trial` compares that with a trial's label: on a ``slip`` trial
+  the slip is detected when a frame at or after the labelled onset (``t >= slip_onset_s``,
+  the change a frame shows happened since the previous one) crosses the threshold, and a
+  crossing before the onset is a false alarm; on a ``no_slip`` trial any crossing is a
+  false alarm.
+- :func:`best_scale`: the threshold scale that best separates labelled slip from no-slip
+  trials (largest detection rate minus false-alarm rate; ties go to the scale nearest 2).
+- :func:`slip_signal_file` (``tactile slip-signal``): all of it for every trial of a file,
+  on height maps (a ``tactile heightmap`` file, or frames through a normal model) or on
+  the frames' colour change from the reference (``intensity``: for sensors without
+  calibration presses), or both side by side.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..progress import NullProgress, Progress
+from ..store.trials import TactileFile, Trial
+from .heightmap import STREAM, HeightMapper, frames_px_per_mm, read_height_maps, trial_heights
+from .mesh import sample_mesh
+from .normals import NormalModel, default_workers
+
+DEFAULT_N_STATIC = 30
+DEFAULT_SCALE = 2.0
+#: threshold scales :func:`best_scale` tries
+SCALE_GRID = tuple(np.round(np.arange(1.0, 20.01, 0.1), 2))
+
+
+def slip_signal(heights: np.ndarray, mesh: tuple[int, int] | None = None) -> np.ndarray:
+    """Eq. 10. heights: (n_frames, H, W) maps (mm, or any map unit); mesh: (cols, rows) of
+    the tactile mesh, None for every pixel. Returns (n_frames,) float64, ``S[0] = NaN``."""
+    h = np.asarray(heights)
+    if h.ndim != 3:
+        raise ValueError(f"`heights` has shape {h.shape}; expected (n_frames, H, W)")
+    units = h if mesh is None else sample_mesh(h, mesh)
+    out = np.full(h.shape[0], np.nan)
+    if h.shape[0] > 1:
+        d = np.abs(np.diff(units.astype(np.float64, copy=False), axis=0))
+        out[1:] = d.reshape(d.shape[0], -1).sum(axis=1)
+    return out
+
+
+def _static_index(signal: np.ndarray, n_static: int) -> np.ndarray:
+    idx = np.flatnonzero(np.isfinite(signal))
+    if n_static < 1:
+        raise ValueError(f"`n_static` (={n_static}) must be at least 1")
+    if idx.size < n_static:
+        raise ValueError(f"the adaptive threshold needs {n_static} static slip signals but "
+                         f"the signal has {idx.size} finite values; lower `n_static`")
+    return idx[:n_static]
+
+
+def adaptive_threshold(signal: np.ndarray, n_static: int = DEFAULT_N_STATIC,
+                       scale: float = DEFAULT_SCALE) -> float:
+    """``scale`` x the mean of the first ``n_static`` finite values of ``signal``
+    ((n_frames,) slip signal). ValueError when there are fewer."""
+    if not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"`scale` (={scale}) must be a positive number")
+    s = np.asarray(signal, dtype=np.float64)
+    return float(scale * s[_static_index(s, n_static)].mean())
+
+
+@dataclass
+class SlipDetection:
+    """One trial's slip decision.
+
+    signal: (n_frames,) slip signal; t_s: (n_frames,) frame times (s); threshold: the
+    adaptive (or given) threshold; first_judged: index of the first frame judged (the
+    frames before it gave the threshold); detected: any judged frame above the threshold;
+    first_index / first_time_s: the first such frame (None when not detected);
+    crossings: indices of every judged frame above the threshold.
+    """
+
+    signal: np.ndarray = field(repr=False)
+    t_s: np.ndarray = field(repr=False)
+    threshold: float
+    first_judged: int
+    detected: bool
+    first_index: int | None
+    first_time_s: float | None
+    crossings: np.ndarray = field(repr=False)
+
+    def peak_ratio(self) -> float:
+        """Largest judged signal over the mean static signal (the paper's 'ratio between
+        the signal peak and the average signal before slip'); NaN without judged frames."""
+        judged = self.signal[self.first_judged:]
+        static = self.signal[:self.first_judged]
+        static = static[np.isfinite(static)]
+        if judged.size == 0 or static.size == 0 or not static.mean() > 0:
+            return float("nan")
+        return float(np.nanmax(judged) / static.mean())
+
+
+def detect_slip(signal: np.ndarray, t_s: np.ndarray, *, n_static: int = DEFAULT_N_STATIC,
+                scale: float = DEFAULT_SCALE, threshold: float | None = None
+                ) -> SlipDetection:
+    """Judge every frame after the first ``n_static`` finite signals against the adaptive
+    threshold (or ``threshold`` when given): a frame whose signal is larger is a slip."""
+    s = np.asarray(signal, dtype=np.float64)
+    t = np.asarray(t_s, dtype=np.float64)
+    if s.shape != t.shape or s.ndim != 1:
+        raise ValueError(f"`signal` {s.shape} and `t_s` {t.shape} must be (n_frames,)")
+    first = int(_static_index(s, n_static)[-1]) + 1
+    thr = adaptive_threshold(s, n_static, scale) if threshold is None else float(threshold)
+    above = np.flatnonzero(s[first:] > thr) + first
+    hit = above.size > 0
+    return SlipDetection(signal=s, t_s=t, threshold=thr, first_judged=first, detected=hit,
+                         first_index=int(above[0]) if hit else None,
+                         first_time_s=float(t[above[0]]) if hit else None, crossings=above)
+
+
+@dataclass(frozen=True)
+class TrialScore:
+    """A detection against a trial's label. slip: the label (True: slip); detected: a
+    crossing at or after the onset (slip trials; False on no_slip trials); false_alarm: a
+    crossing before the onset, or any crossing on a no_slip trial; delay_s: first crossing
+    at or after the onset minus the onset (slip trials that were detected), else None."""
+
+    slip: bool
+    detected: bool
+    false_alarm: bool
+    delay_s: float | None
+
+
+def score_trial(det: SlipDetection, *, slip: bool, onset_s: float | None) -> TrialScore:
+    """Score ``det`` against the label (``slip``; ``onset_s`` required when slip)."""
+    times = det.t_s[det.crossings]
+    if not slip:
+        return TrialScore(False, False, bool(times.size), None)
+    if onset_s is None or not np.isfinite(onset_s):
+        raise ValueError("a slip trial needs its `onset_s` to be scored")
+    after = times[times >= onset_s]
+    return TrialScore(True, bool(after.size), bool((times < onset_s).any()),
+                      float(after[0] - onset_s) if after.size else None)
+
+
+@dataclass(frozen=True)
+class Rates:
+    """Detection rate over slip trials and false-alarm rate over all trials (a slip trial
+    with a crossing before its onset counts as a false alarm too)."""
+
+    n_slip: int
+    n_no_slip: int
+    detection_rate: float
+    false_alarm_rate: float
+    false_alarms: int
+
+    @classmethod
+    def of(cls, scores: Sequence[TrialScore]) -> Rates:
+        n_slip = sum(s.slip for s in scores)
+        det = sum(s.detected for s in scores if s.slip)
+        fa = sum(s.false_alarm for s in scores)
+        return cls(n_slip, len(scores) - n_slip,
+                   det / n_slip if n_slip else float("nan"),
+                   fa / len(scores) if scores else float("nan"), fa)
+
+
+@dataclass(frozen=True)
+class ScaleChoice:
+    """The best threshold scale: scale, its rates, and the range of scales as good."""
+
+    scale: float
+    rates: Rates
+    best_from: float
+    best_to: float
+
+
+def best_scale(signals: Sequence[tuple[np.ndarray, np.ndarray]],
+               labels: Sequence[tuple[bool, float | None]], *,
+               n_static: int = DEFAULT_N_STATIC,
+               grid: Sequence[float] = SCALE_GRID) -> ScaleChoice:
+    """Try every scale of ``grid`` on the labelled trials ((signal, t_s) and (slip,
+    onset_s) per trial); return the one with the largest detection rate minus false-alarm
+    rate (ties: nearest to the paper's 2)."""
+    if not signals:
+        raise ValueError("no labelled trials to choose a threshold scale on")
+    best: list[tuple[float, float, Rates]] = []
+    for scale in grid:
+        scores = [score_trial(detect_slip(s, t, n_static=n_static, scale=scale),
+                              slip=lab, onset_s=on)
+                  for (s, t), (lab, on) in zip(signals, labels, strict=True)]
+        r = Rates.of(scores)
+        dr = 0.0 if np.isnan(r.detection_rate) else r.detection_rate
+        best.append((dr - r.false_alarm_rate, float(scale), r))
+    top = max(b[0] for b in best)
+    winners = [b for b in best if b[0] == top]
+    score, scale, rates = min(winners, key=lambda b: abs(b[1] - DEFAULT_SCALE))
+    return ScaleChoice(scale, rates, min(w[1] for w in winners), max(w[1] for w in winners))
+
+
+
+
+# -- file level: `tactile slip-signal` -------------------------------------------------------
+#: where the maps of the slip signal come from
+SOURCES = ("auto", "height", "intensity", "both")
+
+
+@dataclass
+class TrialSlip:
+    """One trial's slip decision from one source (``height`` or ``intensity``): its label
+    (``slip`` True/False, None when the trial has no slip label), onset, detection and
+    score (None without a label)."""
+
+    trial: str
+    source: str
+    object: str | None
+    slip: bool | None
+    onset_s: float | None
+    detection: SlipDetection
+    score: TrialScore | None
+
+    def as_dict(self, *, with_signal: bool = True) -> dict[str, object]:
+        d = self.detection
+        out: dict[str, object] = {
+            "trial": self.trial, "source": self.source, "object": self.object,
+            "label": None if self.slip is None else ("slip" if self.slip else "no_slip"),
+            "slip_onset_s": self.onset_s, "threshold": d.threshold,
+            "detected": d.detected, "first_detection_s": d.first_time_s,
+            "first_judged_s": float(d.t_s[d.first_judged]) if d.first_judged < d.t_s.size
+            else None, "peak_ratio": _finite_or_none(d.peak_ratio()),
+        }
+        if self.score is not None:
+            out.update(slip_detected=self.score.detected, false_alarm=self.score.false_alarm,
+                       delay_s=self.score.delay_s)
+        if with_signal:
+            out["t_s"] = [float(v) for v in d.t_s]
+            out["signal"] = [_finite_or_none(float(v)) for v in d.signal]
+        return out
+
+
+def _finite_or_none(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
+
+
+def trial_label(labels: dict[str, object], *, path: object, trial: str
+                ) -> tuple[bool | None, float | None]:
+    """(slip, onset_s) from a trial's labels ``slip`` (slip | no_slip) and ``slip_onset_s``;
+    (None, None) without a ``slip`` label; InputError for other values."""
+
+    value = labels.get("slip")
+    if value is None or value == "":
+        return None, None
+    if str(value) not in ("slip", "no_slip"):
+        raise InputError(f"trial {trial!r} has label slip={value!r}; expected slip or no_slip",
+                         path=str(path), where=f"/trials/{trial}/labels")
+    if str(value) == "no_slip":
+        return False, None
+    onset = labels.get("slip_onset_s")
+    try:
+        onset_f = float(onset)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        onset_f = float("nan")
+    if not np.isfinite(onset_f):
+        raise InputError(f"slip trial {trial!r} has no numeric slip_onset_s label "
+                         f"(={onset!r})", path=str(path), where=f"/trials/{trial}/labels")
+    return True, onset_f
+
+
+@dataclass
+class SlipFileResult:
+    """Every trial's decision per source, and per source the rates and the best threshold
+    scale over the labelled trials (empty without labels)."""
+
+    path: str
+    mesh: tuple[int, int]
+    scale: float
+    n_static: int
+    trials: list[TrialSlip]
+    rates: dict[str, Rates]
+    best: dict[str, ScaleChoice]
+    run_dir: str | None
+
+    def as_dict(self, *, with_signal: bool = True) -> dict[str, object]:
+        return {
+            "file": self.path, "mesh": f"{self.mesh[0]}x{self.mesh[1]}", "scale": self.scale,
+            "n_static": self.n_static, "run": self.run_dir,
+            "summary": {src: {**asdict(r), **({"best_scale": self.best[src].scale,
+                                               "best_scale_range": [self.best[src].best_from,
+                                                                    self.best[src].best_to],
+                                               "best_scale_rates": asdict(self.best[src].rates)}
+                                              if src in self.best else {})}
+                        for src, r in self.rates.items()},
+            "trials": [t.as_dict(with_signal=with_signal) for t in self.trials],
+        }
+
+
+def trial_maps(trial: Trial, source: str, mapper: HeightMapper | None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(n_frames, H, W) maps and t_s of one trial for ``source`` (``height``: the trial's
+    height_mm stream, else its frames through ``mapper``; ``intensity``: the frames' mean
+    colour change from the reference)."""
+    if source == "height":
+        if trial.has_signal(STREAM):
+            maps, t_s, _ = read_height_maps(trial)
+            return maps, t_s
+        if mapper is None:
+            raise InputError(f"trial {trial.name!r} has frames but no height maps; pass "
+                             "`run_dir` (a normal model) or use `source='intensity'`",
+                             path=trial.path)
+        return trial_heights(mapper, trial)
+    if not trial.has_frames:
+        raise InputError(f"trial {trial.name!r} has no frames for the intensity source (a "
+                         "heightmap file keeps only heights; give the ingested frames file)",
+                         path=trial.path)
+    from .signals import intensity_maps
+
+    frames = trial.frames()
+    ref = frames.reference
+    maps = np.stack([intensity_maps(img[None], ref)[0] for _, img in frames])
+    return maps, frames.t_s
+
+
+def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
+                     run_dir: str | os.PathLike[str] | None = None,
+                     mesh: tuple[int, int] = (32, 24), scale: float = DEFAULT_SCALE,
+                     n_static: int = DEFAULT_N_STATIC, trials: Sequence[str] | None = None,
+                     px_per_mm: float | None = None, workers: int | None = None,
+                     progress: Progress | None = None,
+                     keep_maps: dict[tuple[str, str], np.ndarray] | None = None
+                     ) -> SlipFileResult:
+    """The slip signal (eq. 10) on ``mesh`` of every trial of ``path`` (an ingested
+    frames file or a ``tactile heightmap`` file), its adaptive threshold (``scale`` x the
+    mean of the first ``n_static`` signals) and slip decision; with trial labels, the
+    detection rate, false alarms and the best threshold scale per source.
+
+    source: ``height`` (the file's height maps, or the frames through the normal model of
+    ``run_dir``), ``intensity`` (colour change from the reference), ``both``, or ``auto``
+    (height when the file holds height maps or ``run_dir`` is given, else intensity)."""
+    if source not in SOURCES:
+        raise InputError(f"`source` (={source!r}) must be one of {', '.join(SOURCES)}")
+    if not (np.isfinite(scale) and scale > 0):
+        raise InputError(f"`scale` (={scale}) must be a positive number")
+    if n_static < 1:
+        raise InputError(f"`n_static` (={n_static}) must be at least 1")
+    prog = progress or NullProgress()
+    out: list[TrialSlip] = []
+    with TactileFile(path) as tf:
+        chosen = tf.trials(list(trials)) if trials is not None else tf.trials()
+        if not chosen:
+            raise InputError("the file holds no trials", path=tf.path)
+        has_heights = all(t.has_signal(STREAM) for t in chosen)
+        if source == "auto":
+            source = "height" if has_heights or run_dir is not None else "intensity"
+        sources = ("height", "intensity") if source == "both" else (source,)
+        mapper = None
+        if "height" in sources and not has_heights:
+            if run_dir is None:
+                raise InputError("the height source needs height maps: give a `tactile "
+                                 "heightmap` file or pass `run_dir` (a normal model), or use "
+                                 "`source='intensity'`", path=tf.path)
+            first = next((t for t in chosen if t.has_frames), None)
+            if first is None:
+                raise InputError("no trial holds frames or height maps", path=tf.path)
+            mapper = HeightMapper(NormalModel.from_run(run_dir),
+                                  frames_px_per_mm(tf, first, px_per_mm),
+                                  workers=default_workers() if workers is None else workers)
+        prog.start(len(chosen) * len(sources), "slip signals")
+        for t in chosen:
+            slip, onset = trial_label(t.labels, path=tf.path, trial=t.name)
+            obj = t.labels.get("object")
+            for src in sources:
+                maps, t_s = trial_maps(t, src, mapper)
+                try:
+                    sig = slip_signal(maps, mesh)
+                    det = detect_slip(sig, t_s, n_static=n_static, scale=scale)
+                except ValueError as exc:
+                    raise InputError(f"trial {t.name!r}: {exc}", path=tf.path) from None
+                if keep_maps is not None:
+                    keep_maps[(t.name, src)] = maps
+                score = None if slip is None else score_trial(det, slip=slip, onset_s=onset)
+                out.append(TrialSlip(t.name, src, None if obj is None else str(obj), slip,
+                                     onset, det, score))
+                prog.advance()
+    rates: dict[str, Rates] = {}
+    best: dict[str, ScaleChoice] = {}
+    for src in sources:
+        labelled = [r for r in out if r.source == src and r.score is not None]
+        if labelled:
+            rates[src] = Rates.of([r.score for r in labelled if r.score is not None])
+            best[src] = best_scale([(r.detection.signal, r.detection.t_s) for r in labelled],
+                                   [(bool(r.slip), r.onset_s) for r in labelled],
+                                   n_static=n_static)
+    cells = (int(mesh[0]), int(mesh[1]))
+    return SlipFileResult(str(path), cells, float(scale), int(n_static), out, rates, best,
+                          None if run_dir is None else str(run_dir))
+
+
+__all__ = ["DEFAULT_N_STATIC", "DEFAULT_SCALE", "SCALE_GRID", "SOURCES", "Rates", "ScaleChoice",
+           "SlipDetection", "SlipFileResult", "TrialScore", "TrialSlip", "adaptive_threshold",
+           "best_scale", "detect_slip", "score_trial", "slip_signal", "slip_signal_file",
+           "trial_label", "trial_maps"]

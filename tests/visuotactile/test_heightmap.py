@@ -1,0 +1,113 @@
+"""Height maps of a frames file: `tactile heightmap`, RMSE against the truth, the stream."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tactile_cli.cli import app
+from tactile_cli.errors import InputError
+from tactile_cli.store.trials import TactileFile
+from tactile_cli.visuotactile.heightmap import (
+    HeightMapper,
+    heightmap_file,
+    read_height_maps,
+)
+from tactile_cli.visuotactile.normals import NormalModel
+from tactile_cli.visuotactile.slip import slip_signal_file
+from tests.factories.gel_frames import make_frames_file, normal_run
+
+pytest.importorskip("torch")
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    base = tmp_path_factory.mktemp("heightmap")
+    frames = base / "frames.h5"
+    truth = make_frames_file(frames, n_trials=2, n_frames=40)
+    tdir = base / "truth"
+    tdir.mkdir()
+    for name, h in truth.items():
+        np.savez_compressed(tdir / f"{name}.npz", height_mm=h)
+    no_scale = base / "no_scale.h5"
+    make_frames_file(no_scale, n_trials=1, n_frames=3, onset_frame=1, px_per_mm=None)
+    run = normal_run(tmp_path_factory.getbasetemp() / "normal_runs")
+    return {"frames": frames, "truth": tdir, "run": run, "no_scale": no_scale, "base": base}
+
+
+def test_heightmap_file_rmse_and_stream(scene: dict[str, Path], tmp_path: Path) -> None:
+    out = tmp_path / "h.h5"
+    keep: dict[str, np.ndarray] = {}
+    res = heightmap_file(scene["frames"], scene["run"], out, truth_dir=scene["truth"],
+                         keep=keep)
+    # a 3-epoch network: peaks within 10 % of 0.4 mm, RMSE a few hundredths of a mm
+    assert res.rmse_mm is not None and res.rmse_mm < 0.04
+    for t in res.trials:
+        assert t.peak_mm == pytest.approx(0.4, rel=0.1)
+    with TactileFile(out) as tf:
+        assert tf.trial_names == ["t_00", "t_01"]
+        h, t_s, ppm = read_height_maps(tf.trial("t_00"))
+        assert h.shape == (40, 48, 64) and ppm == 20.0
+        np.testing.assert_array_equal(h, keep["t_00"])
+        assert tf.trial("t_00").labels["slip"] == "slip"
+        assert [s.path for s in tf.sources][1].endswith("model.pt")
+    # the stream feeds the slip signal
+    slip = slip_signal_file(out, mesh=(16, 12))
+    assert slip.trials[0].source == "height" and slip.rates["height"].detection_rate == 1.0
+
+
+def test_both_sources_side_by_side_from_frames(scene: dict[str, Path]) -> None:
+    res = slip_signal_file(scene["frames"], source="both", run_dir=scene["run"], mesh=(16, 12))
+    assert [(t.trial, t.source) for t in res.trials] == [
+        ("t_00", "height"), ("t_00", "intensity"), ("t_01", "height"), ("t_01", "intensity")]
+    assert set(res.rates) == {"height", "intensity"}
+    assert res.rates["height"].detection_rate == 1.0
+    assert res.as_dict(with_signal=False)["summary"]["height"]["n_slip"] == 1
+
+
+def test_mapper_skip_below_zero_is_exact(scene: dict[str, Path]) -> None:
+    model = NormalModel.from_run(scene["run"])
+    with TactileFile(scene["frames"]) as tf:
+        fr = tf.trial("t_00").frames()
+        frame, ref = fr[10], fr.reference
+    full = HeightMapper(model, 20.0)(frame, ref)
+    skip0 = HeightMapper(model, 20.0, skip_below=0.0)(frame, ref)
+    np.testing.assert_allclose(skip0, full, atol=1e-5)
+    flat = HeightMapper(model, 20.0, skip_below=256.0)(frame, ref)
+    assert np.abs(flat).max() == 0.0
+
+
+def test_cli(scene: dict[str, Path], tmp_path: Path) -> None:
+    out = tmp_path / "h.h5"
+    res = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model", str(scene["run"]),
+                              "--out", str(out), "--truth", str(scene["truth"]), "--json",
+                              "--trial", "t_01", "--plot", str(tmp_path / "fig")])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.output)
+    assert [t["trial"] for t in d["trials"]] == ["t_01"] and d["rmse_mm"] < 0.04
+    assert (tmp_path / "fig" / "height_t_01.png").stat().st_size > 0
+    assert runner.invoke(app, ["validate", str(out)]).exit_code == 0
+    again = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model",
+                                str(scene["run"]), "--out", str(out)])
+    assert again.exit_code == 2 and "--overwrite" in again.output
+    assert runner.invoke(app, ["heightmap", "--help"]).exit_code == 0
+
+
+def test_errors(scene: dict[str, Path], tmp_path: Path) -> None:
+    res = runner.invoke(app, ["heightmap", str(scene["no_scale"]), "--model",
+                              str(scene["run"]), "--out", str(tmp_path / "x.h5")])
+    assert res.exit_code == 2 and "--px-per-mm" in res.output
+    assert not (tmp_path / "x.h5").exists()
+    bad_truth = tmp_path / "truth"
+    bad_truth.mkdir()
+    np.savez_compressed(bad_truth / "t_00.npz", height_mm=np.zeros((3, 4, 5), np.float32))
+    with pytest.raises(InputError, match="shape"):
+        heightmap_file(scene["frames"], scene["run"], tmp_path / "y.h5", truth_dir=bad_truth)
+    assert not (tmp_path / "y.h5").exists()
+    with pytest.raises(InputError, match="not a run folder"):
+        heightmap_file(scene["frames"], tmp_path, tmp_path / "z.h5")
