@@ -12,7 +12,7 @@ import typer
 from ..errors import InputError
 from ._batch import BATCH_FLAGS, FileBatchPrinter, SchedulerOption, WorkersOption, finish_batch
 from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"segment_s": "--segment-s", "cutoff_hz": "--cutoff-hz",
                           "out": "--out", "out_dir": "--out-dir", **BATCH_FLAGS}
@@ -40,9 +40,7 @@ def accel_prepare_command(
                                             "--out-dir: prepare up-to-date inputs again).")
                          ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Cut accelerometer recordings into segments (trials labelled `segment`, for the
     80/10/10 split by segment), add the per-sample `speed_cm_s` target and optionally limit

@@ -15,7 +15,7 @@ from rich.table import Table
 from ..errors import InputError
 from ..vocabulary import BIN_S
 from ._errors import Flag, run_guarded, seconds_as_ms
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -64,12 +64,7 @@ def accumulate_command(
                      metavar="FOLDER", show_default=False),
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing --out/--csv files.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Count events per polarity in fixed bins (20 ms), smooth the net count and, with
     --segment, find each trial's approach, press, slip and release regions (paper 000,

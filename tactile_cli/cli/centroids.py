@@ -10,7 +10,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 
 def centroids_command(
@@ -28,9 +28,7 @@ def centroids_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
                        ] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-                                         "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """ROI centroid trajectories (paper 000, sec. 5.2, eq. 19) as a signal stream for
     `tactile train`/`evaluate`: per trial /trials/{t}/signals/roi_centroids with each ROI's

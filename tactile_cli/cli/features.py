@@ -13,7 +13,7 @@ import typer
 from ..errors import InputError
 from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
 from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir",
                           **BATCH_FLAGS}
@@ -66,9 +66,7 @@ def spectral_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
                        ] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Power ratio Gamma and single- and multi-finger group square coherence G2 (paper 004)
     per sliding window and band, as stream spectral_features (channels

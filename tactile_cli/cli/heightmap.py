@@ -11,7 +11,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"run_dir": "--model", "out": "--out", "truth_dir": "--truth",
                           "px_per_mm": "--px-per-mm", "skip_below": "--skip-below",
@@ -51,9 +51,7 @@ def heightmap_command(
         "height: image and 3-D height map).", metavar="FOLDER", show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Height maps (mm) of every frame: the MLP's surface normals per pixel, gradients by
     eq. 9 and a DST Poisson solve; written as a new tactile HDF5 file (stream height_mm

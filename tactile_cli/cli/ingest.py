@@ -14,7 +14,7 @@ from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
 from ..store.writer import Compression
 from ._batch import BATCH_FLAGS, scheduler_option, workers_option
 from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -136,14 +136,7 @@ def ingest_command(
             min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed."
         ),
     ] = 1,
-    progress: Annotated[
-        bool | None,
-        typer.Option(
-            "--progress/--no-progress",
-            help="Show a progress bar (default: when stderr is a terminal).",
-            show_default=False,
-        ),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
 

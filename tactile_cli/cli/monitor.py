@@ -12,7 +12,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "model_run": "--model", "mesh": "--mesh",
                           "hold_s": "--hold-s", "motion_s": "--motion-s",
@@ -78,9 +78,7 @@ def monitor_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --plot folder.")
                          ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Replay each trial's frames through the monitor: slip signal on the tactile mesh,
     adaptive threshold from the first static second, no-slip/slip modes, raise grip on

@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {
     "out": "--out",
@@ -45,12 +45,7 @@ def normal_labels_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (and "
                                             "--plot folder).")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Find the ball's contact circle in every calibration press (colour difference from the
     reference, robust circle fit), label every pixel inside with the sphere's normal (eqs.

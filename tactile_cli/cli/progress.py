@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import sys
+from typing import Annotated
 
+import typer
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -51,3 +53,12 @@ class RichProgress:
             task = self._bar.tasks[self._task]
             self._bar.update(self._task, completed=task.total)
             self._task = None
+
+
+#: The ``--progress/--no-progress`` option every long-running command takes.
+ProgressOption = Annotated[
+    bool | None,
+    typer.Option("--progress/--no-progress",
+                 help="Show a progress bar (default: when stderr is a terminal).",
+                 show_default=False),
+]

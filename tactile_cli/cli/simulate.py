@@ -10,7 +10,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -68,14 +68,7 @@ def marker_events_command(
         bool, typer.Option(help="Replace an existing non-empty output folder.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option(
-            "--progress/--no-progress",
-            help="Show a progress bar (default: when stderr is a terminal).",
-            show_default=False,
-        ),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate the paper's event-based marker sensor: approach, press, slip, release trials.
 
@@ -139,12 +132,7 @@ def vibro_slip_command(
         bool, typer.Option(help="Replace an existing non-empty output folder.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 001's slip-slide rig: accelerometer fingertips on 3 textures x 4
     angles x 3 motor speeds, as the paper's CSV tree.
@@ -201,12 +189,7 @@ def vibrotouch_command(
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 003's VibroTouch bench: an ERM near 130 Hz in one fingertip, an
     accelerometer (2.5 kHz) in the other, a force sensor (1 kHz); the gripper closes on an
@@ -270,12 +253,7 @@ def taxel_slip_command(
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 004's slip experiments: object/hand slip (independent stick-slip at
     every contact) and object/world slip (one source through each taxel's linear path) on

@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"seed": "--seed", "objects": "--object",
                           "interferences": "--interferences"}
@@ -32,9 +32,7 @@ def digit_avoidance_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing non-empty output folder.")
                          ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate slip avoidance in a closed loop (Figs. 13-14): an object held on a DIGIT-like
     sensor is pushed at known times; a live monitor watches the frames' slip signal and the

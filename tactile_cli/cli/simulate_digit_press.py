@@ -11,7 +11,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite"}
 
@@ -51,12 +51,7 @@ def digit_press_command(
         bool, typer.Option(help="Replace an existing non-empty output folder.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal).",
-                     show_default=False),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 002's DIGIT: ball-bearing calibration presses and objects (cable, box
     face, fabric, hex keys) held for >= 1.2 s and then slipping (+x, -x, +y, -y, z, rot) or

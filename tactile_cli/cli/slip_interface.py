@@ -10,7 +10,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"folds": "--folds"}
 
@@ -33,9 +33,7 @@ def slip_interface_command(
                     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Classify the slip interface (object/hand or object/world) of every trial with a
     Gaussian naive Bayes on the power ratio Gamma, single-finger G2 or multi-finger G2,

@@ -12,7 +12,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "run_dir": "--model", "mesh": "--mesh",
                           "scale": "--scale", "n_static": "--n-static", "trials": "--trial",
@@ -53,9 +53,7 @@ def slip_signal_command(
         "threshold, onset and detection.", metavar="FOLDER", show_default=False)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON (per "
                                           "trial the signal too).")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-        "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Slip signal S = sum |h_t - h_(t-1)| over a tactile mesh (eq. 10), adaptive threshold
     (scale x the mean of the first static signals) and, per trial, whether and when slip

@@ -9,7 +9,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .progress import RichProgress
+from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -41,9 +41,7 @@ def synth_command(
         min=0.001, help="Bin width in ms; overrides the config's bin_s.",
         show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
-    progress: Annotated[bool | None, typer.Option(
-        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
-                                         "terminal).", show_default=False)] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Model-based training trajectories (paper 000, sec. 5.1): random approach, press, slip
     and release trials of net event counts per bin from the first-order-system model, with
