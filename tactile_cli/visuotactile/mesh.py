@@ -5,6 +5,10 @@ A mesh of ``cols x rows`` units on an (H, W) map takes the pixel at the centre o
 ``cols x rows`` equal cells: column ``floor((k + 0.5) W / cols)`` for ``k = 0..cols-1``
 (on a 320 x 240 map the 32 x 24 mesh is every tenth pixel, starting at pixel 5; the
 320 x 240 mesh is every pixel). The paper's densities are :data:`MESH_SIZES`.
+
+The slip signal of eq. 10 on a mesh, :func:`slip_signal`, lives here too, beside the units
+it sums over: :mod:`.slip` (decisions, files) and :mod:`.signals` (the monitor's inputs)
+both take it from here.
 """
 
 from __future__ import annotations
@@ -56,4 +60,18 @@ def mesh_mask(height: int, width: int, mesh: tuple[int, int]) -> np.ndarray:
     return mask
 
 
-__all__ = ["MESH_SIZES", "mesh_indices", "mesh_mask", "parse_mesh", "sample_mesh"]
+def slip_signal(heights: np.ndarray, mesh: tuple[int, int] | None = None) -> np.ndarray:
+    """Eq. 10. heights: (n_frames, H, W) maps (mm, or any map unit); mesh: (cols, rows) of
+    the tactile mesh, None for every pixel. Returns (n_frames,) float64, ``S[0] = NaN``."""
+    h = np.asarray(heights)
+    if h.ndim != 3:
+        raise ValueError(f"`heights` has shape {h.shape}; expected (n_frames, H, W)")
+    units = h if mesh is None else sample_mesh(h, mesh)
+    out = np.full(h.shape[0], np.nan)
+    if h.shape[0] > 1:
+        d = np.abs(np.diff(units.astype(np.float64, copy=False), axis=0))
+        out[1:] = d.reshape(d.shape[0], -1).sum(axis=1)
+    return out
+
+
+__all__ = ["slip_signal", "MESH_SIZES", "mesh_indices", "mesh_mask", "parse_mesh", "sample_mesh"]

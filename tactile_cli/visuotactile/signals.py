@@ -7,7 +7,7 @@ slip signal is taken on, and per-frame gripper-motion flags.
 - ``height`` source: height maps reconstructed by the trained normal network and the
   Poisson integration (:mod:`.normals`, :mod:`.heightmap`);
 - :func:`mesh_slip_signal`: the slip signal of eq. (4) on a ``cols x rows`` mesh,
-  computed by :func:`tactile_cli.visuotactile.slip.slip_signal`;
+  computed by :func:`tactile_cli.visuotactile.mesh.slip_signal`;
 - :func:`moving_flags`: which frames' signals include gripper motion, from intervals.
 """
 
@@ -16,6 +16,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+
+from .mesh import slip_signal
 
 #: The paper's default tactile mesh (columns, rows): one pixel in ten of 320 x 240.
 DEFAULT_MESH = (32, 24)
@@ -49,9 +51,7 @@ def intensity_maps(frames: np.ndarray, reference: np.ndarray, *,
 
 def mesh_slip_signal(maps: np.ndarray, mesh: tuple[int, int] = DEFAULT_MESH) -> np.ndarray:
     """Slip signal of (n, H, W) maps on a ``(cols, rows)`` mesh: (n,) float, the first
-    value NaN (no previous frame); see :func:`.slip.slip_signal`."""
-    from .slip import slip_signal
-
+    value NaN (no previous frame); see :func:`.mesh.slip_signal`."""
     return np.asarray(slip_signal(maps, mesh=mesh), dtype=np.float64)
 
 

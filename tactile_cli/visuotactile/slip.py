@@ -35,27 +35,13 @@ from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.trials import TactileFile, Trial
 from .heightmap import STREAM, HeightMapper, frames_px_per_mm, read_height_maps, trial_heights
-from .mesh import sample_mesh
+from .mesh import slip_signal
 from .normals import NormalModel, default_workers
 
 DEFAULT_N_STATIC = 30
 DEFAULT_SCALE = 2.0
 #: threshold scales :func:`best_scale` tries
 SCALE_GRID = tuple(np.round(np.arange(1.0, 20.01, 0.1), 2))
-
-
-def slip_signal(heights: np.ndarray, mesh: tuple[int, int] | None = None) -> np.ndarray:
-    """Eq. 10. heights: (n_frames, H, W) maps (mm, or any map unit); mesh: (cols, rows) of
-    the tactile mesh, None for every pixel. Returns (n_frames,) float64, ``S[0] = NaN``."""
-    h = np.asarray(heights)
-    if h.ndim != 3:
-        raise ValueError(f"`heights` has shape {h.shape}; expected (n_frames, H, W)")
-    units = h if mesh is None else sample_mesh(h, mesh)
-    out = np.full(h.shape[0], np.nan)
-    if h.shape[0] > 1:
-        d = np.abs(np.diff(units.astype(np.float64, copy=False), axis=0))
-        out[1:] = d.reshape(d.shape[0], -1).sum(axis=1)
-    return out
 
 
 def _static_index(signal: np.ndarray, n_static: int) -> np.ndarray:
