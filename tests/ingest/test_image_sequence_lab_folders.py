@@ -136,3 +136,24 @@ def test_sizes_must_match(tmp_path: Path) -> None:
     code, output = _ingest(str(tmp_path / "s"), "--reference", "first", "--out",
                            str(tmp_path / "o.h5"))
     assert code == 2 and "640x480" in output and "320x240" in output
+
+
+def test_out_dir_carries_reference_scale_and_labels_json(tmp_path: Path) -> None:
+    """`--out-dir` (one file per input, in this process) applies --reference first,
+    --px-per-mm and each folder's labels.json exactly as `--out` does."""
+    inputs = []
+    for name, obj in (("a", "cable"), ("b", "box")):
+        images = _frames(tmp_path / "raw" / name, 4, size_hw=(240, 320), seed=len(obj))
+        (tmp_path / "raw" / name / "labels.json").write_text(json.dumps({"object": obj}))
+        inputs.append((name, obj, images))
+    out_dir = tmp_path / "h5"
+    code, output = _ingest(*(str(tmp_path / "raw" / n) for n, _, _ in inputs),
+                           "--reference", "first", "--px-per-mm", "12.5",
+                           "--out-dir", str(out_dir), "--workers", "0")
+    assert code == 0, output
+    for name, obj, images in inputs:
+        with TactileFile(out_dir / f"{name}.h5") as f:
+            frames = f.trial(name).frames()
+            assert np.array_equal(frames.reference, images[0]) and len(frames) == 4
+            assert f.sensor(frames.sensor_name).attrs["px_per_mm"] == 12.5
+            assert f.trial(name).labels["object"] == obj
