@@ -19,6 +19,7 @@ tests/test_errors.py keeps the library free of flags.
 
 from __future__ import annotations
 
+import numbers
 from pathlib import Path
 
 
@@ -57,3 +58,11 @@ class InputError(TactileError):
 
 class SchemaError(TactileError):
     """A file does not follow the tactile HDF5 schema (see ``tactile validate``)."""
+
+
+def check_seed(seed: object) -> int:
+    """``seed`` as an ``int``; an :class:`InputError` unless it is a non-negative integer
+    (Python or numpy; a bool is refused). Every simulator takes its seed through this."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
+    return int(seed)

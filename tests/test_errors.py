@@ -107,3 +107,20 @@ def test_argument_errors_name_the_python_argument(tmp_path):
     with pytest.raises(InputError) as exc:
         data_files([])
     assert str(exc.value) == "no data files; give `data_paths`"
+
+
+@pytest.mark.parametrize("bad", [-1, True, 1.5, "3", None])
+def test_check_seed_refuses_what_is_not_a_non_negative_integer(bad: object) -> None:
+    from tactile_cli.errors import check_seed
+
+    with pytest.raises(InputError, match=r"`seed` \(=.*\) must be a non-negative integer"):
+        check_seed(bad)
+
+
+def test_check_seed_takes_python_and_numpy_integers() -> None:
+    import numpy as np
+
+    from tactile_cli.errors import check_seed
+
+    assert check_seed(0) == 0 and check_seed(np.int64(7)) == 7
+    assert type(check_seed(np.uint32(3))) is int

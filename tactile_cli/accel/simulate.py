@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..errors import InputError
+from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import check_output_folder, output_folder
@@ -207,9 +207,7 @@ def simulate_vibro_slip(cfg: VibroSceneConfig, out_dir: str | Path, *, seed: int
     """
     started = time.perf_counter()
     progress = progress or NullProgress()
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
-    seed = int(seed)
+    seed = check_seed(seed)
     out = check_output_folder(out_dir, overwrite=overwrite)
     cells = [(ti, tex, oi, ori, si, rps)
              for ti, tex in enumerate(cfg.textures)

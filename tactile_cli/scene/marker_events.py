@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..errors import InputError
+from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.origin import DATASET_LABEL, ORIGIN_LABEL
@@ -121,9 +121,7 @@ def simulate_marker_events(
     """
     started = time.perf_counter()
     progress = progress or NullProgress()
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
-    seed = int(seed)
+    seed = check_seed(seed)
     out = check_output_folder(out_dir, overwrite=overwrite)
     layout = scene_layout(config)
     cells = [(g, k) for g in range(1, config.trials.groups + 1)

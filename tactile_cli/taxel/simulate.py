@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.writer import StoreWriter, current_command
@@ -225,9 +225,7 @@ def simulate_taxel_slip(cfg: SceneConfig, out: str | Path, *, seed: int,
     """
     started = time.perf_counter()
     progress = progress or NullProgress()
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
-    seed = int(seed)
+    seed = check_seed(seed)
     jobs = [(p, s, k) for p in cfg.presets for s in SLIP_TYPES
             for k in range(cfg.trials_per_class)]
     counts: dict[str, dict[str, int]] = {p: dict.fromkeys(SLIP_TYPES, 0) for p in cfg.presets}

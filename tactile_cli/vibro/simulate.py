@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.writer import StoreWriter, current_command
@@ -251,9 +251,7 @@ def simulate_vibrotouch(cfg: SceneConfig, out: str | Path, *, seed: int,
     """
     started = time.perf_counter()
     progress = progress or NullProgress()
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
-    seed = int(seed)
+    seed = check_seed(seed)
     jobs = [(simulate_contact_trial, k) for k in range(cfg.contact_trials)] + \
            [(simulate_touch_trial, k) for k in range(cfg.touch_trials)]
     truths: list[dict[str, Any]] = []

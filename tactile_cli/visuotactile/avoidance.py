@@ -45,7 +45,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from ..config_file import load_yaml_model
-from ..errors import InputError
+from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import output_folder
@@ -347,8 +347,7 @@ def simulate_digit_avoidance(cfg: AvoidanceConfig, out: str | Path, *, seed: int
     from .._version import __version__
     from ..store.writer import current_command
 
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
+    seed = check_seed(seed)
     progress = progress or NullProgress()
     started = time.perf_counter()
     rng = np.random.default_rng(seed)

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..errors import InputError
+from ..errors import InputError, check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import check_output_folder, output_folder
@@ -222,9 +222,7 @@ def simulate_digit_press(config: SceneConfig, out_dir: str | Path, *, seed: int,
     """
     started = time.perf_counter()
     progress = progress or NullProgress()
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"`seed` (={seed!r}) must be a non-negative integer")
-    seed = int(seed)
+    seed = check_seed(seed)
     out = check_output_folder(out_dir, overwrite=overwrite)
     optics = scene_optics(config, seed)
     presses = plan_presses(config, seed)
