@@ -214,6 +214,30 @@ def total_events_area(scenes: list[dict], window_s: float = 1.15) -> np.ndarray:
     return np.array(out)
 
 
+def fitted_alphas(scenes: list[dict], duration: str = "fitted") -> np.ndarray:
+    """The press gain alpha_1 of eq. 16 fitted to each trial's net counts over its press
+    region (the ``fos_alpha`` input of `tactile grade`), events per bin. ``duration``:
+    ``fitted`` (T iterated, as `tactile fit-fos` does), ``nominal`` (T = the scene's 0.4 s
+    for every press) or ``true`` (the simulator's own T of each press: what a robot that
+    measured every press duration would give; not available from the events)."""
+    from tactile_cli.fos import fit_pulse
+
+    rows = [t for s in scenes for t in s["trials"]]
+    n = max(len(r["positive"]) for r in rows)
+    t_s, y = np.zeros((len(rows), n)), np.zeros((len(rows), n))
+    mask = np.zeros((len(rows), n), dtype=bool)
+    for i, r in enumerate(rows):
+        pos, neg = np.array(r["positive"], float), np.array(r["negative"], float)
+        tc = r["t0_s"] + 0.02 * np.arange(pos.size)
+        start, end = r["region_s"]
+        inside = (tc >= start) & (tc < end)
+        k = int(inside.sum())
+        t_s[i, :k], y[i, :k], mask[i, :k] = tc[inside] - start, (pos - neg)[inside], True
+    known = {"fitted": None, "nominal": 0.4,
+             "true": np.array([r["press_duration_s"] for r in rows])}[duration]
+    return fit_pulse(t_s, y, mask, duration_s=known).alpha
+
+
 def run(calibrate_seeds: list[int], heldout_seeds: list[int], cache: Path,
         log=print) -> dict:
     clash = sorted(set(heldout_seeds) & (set(calibrate_seeds) | USED_SEEDS))
@@ -260,6 +284,14 @@ def run(calibrate_seeds: list[int], heldout_seeds: list[int], cache: Path,
         "true_alpha": oracle(alpha, held_lv),
         "total_events_fixed_window": oracle(total_events_area(held), held_lv),
     }
+    # the model-based input (fitted alpha_1), calibrated on the calibration seeds
+    cal_scenes = [scenes[s] for s in calibrate_seeds]
+    out["fos_alpha"] = {}
+    for duration in ("fitted", "nominal", "true"):
+        cal_a, held_a = fitted_alphas(cal_scenes, duration), fitted_alphas(held, duration)
+        out["fos_alpha"][f"T_{duration}"] = {
+            **score(calibrate(base, cal_a, cal_lv), held_a, held_lv),
+            "oracle": oracle(held_a, held_lv)}
     rel = [float(np.std(held_x[held_lv == lv]) / np.mean(held_x[held_lv == lv]))
            for lv in range(1, 13)]
     means = [float(np.mean(held_x[held_lv == lv])) for lv in range(1, 13)]
@@ -364,6 +396,9 @@ def main() -> int:
         f"{lv}: {100 * v:.0f}" for lv, v in result["pooled_per_level"].items()))
     print("  best thresholds chosen on the held-out trials (ceilings): " + ", ".join(
         f"{k} {pct(v)}" for k, v in result["oracle"].items()))
+    print("  fitted alpha_1 as the input (calibrated as above; ceiling): " + ", ".join(
+        f"{k} {pct(v['accuracy'])} ({pct(v['oracle'])})"
+        for k, v in result["fos_alpha"].items()))
     return 0
 
 
