@@ -22,6 +22,11 @@ ACTIONS: tuple[str, ...] = ("approach", "press", "slip", "release")
 #: Default bin width of event counts, seconds (paper 000's 20 ms bins).
 BIN_S: float = 0.02
 
+#: The pressing-force grades of paper 000 (sec. 4.4, Table III), lowest first, as the
+#: scenes name them; files and figure names write them with ``_`` for the space.
+FORCE_GRADES: tuple[str, ...] = ("light", "small", "small medium", "medium", "small big",
+                                 "big")
+
 
 #: The eight accelerometer channel configurations of paper 001 (sec. 4) by name: L and R
 #: are the left and right fingertips, x/y/z their axes; values are channel names of the

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..natural import natural_key
+from ..vocabulary import FORCE_GRADES
 
 #: At most this many figures of one kind are drawn; the rest are counted and listed.
 MAX_GRID = 12
@@ -60,6 +61,7 @@ class FigureInfo:
     subject: str
     order: int
     file: str | None = None
+    rank: int | None = None  #: place among its gallery's figures, before name order
 
     @property
     def caption(self) -> str:
@@ -109,9 +111,11 @@ def _fos(path: Path, stem: str, parent: str) -> FigureInfo | None:
         return None
     region = m["region"]
     grade = m["grade"]
-    subject = f"force grade {grade.replace('_', ' ')}" if grade else "all trials"
+    words = grade.replace("_", " ") if grade else None
+    subject = f"force grade {words}" if words else "all trials"
+    rank = FORCE_GRADES.index(words) if words in FORCE_GRADES else None
     return FigureInfo(path, ("fos", region), _FOS_TITLES[region], subject,
-                      20 if region == "press" else 21)
+                      20 if region == "press" else 21, rank=rank)
 
 
 def _frames(path: Path, stem: str, parent: str) -> FigureInfo | None:
@@ -189,8 +193,8 @@ def describe_figure(rel: str | Path) -> FigureInfo:
 def group_figures(rel_paths: Sequence[str | Path],
                   file_rank: Mapping[str, int] | None = None) -> list[Gallery]:
     """The galleries of ``rel_paths``: one per kind, ordered by kind (quick looks by
-    ``file_rank[file stem]``, then by name; unranked files last), figures in natural name
-    order."""
+    ``file_rank[file stem]``, then by name; unranked files last), figures in the force grades'
+    order (paper 000's Table III) where their names carry one, else in natural name order."""
     rank = file_rank or {}
     by_key: dict[tuple[str, ...], Gallery] = {}
     for rel in rel_paths:
@@ -199,7 +203,9 @@ def group_figures(rel_paths: Sequence[str | Path],
                                                 file=info.file))
         g.figures.append(info)
     for g in by_key.values():
-        g.figures.sort(key=lambda f: natural_key(f.path.as_posix()))
+        # the paper's grades lightest first (light, small, ..., big), the rest by name
+        g.figures.sort(key=lambda f: (f.rank is None, f.rank or 0,
+                                      natural_key(f.path.as_posix())))
 
     def order(g: Gallery) -> tuple[int, int, tuple[object, ...]]:
         file_order = rank.get(g.file, len(rank)) if g.file is not None else 0

@@ -26,7 +26,7 @@ from pydantic import (
 
 from ..config_file import load_yaml_model
 from ..errors import InputError
-from ..vocabulary import BIN_S
+from ..vocabulary import BIN_S, FORCE_GRADES
 
 
 class _Model(BaseModel):
@@ -58,7 +58,7 @@ class TrialsConfig(_Model):
     levels: list[int] | None = None
     """The force levels to simulate (1-based); ``null`` for all."""
     force_grades: list[str] = Field(
-        default=["light", "small", "small medium", "medium", "small big", "big"], min_length=1)
+        default_factory=lambda: list(FORCE_GRADES), min_length=1)
     """Names of the force grades (sec. 4.4, Table III), lowest first; the levels are split
     evenly among them (12 levels, 6 grades: 2 levels per grade)."""
 

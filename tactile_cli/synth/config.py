@@ -17,7 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..config_file import load_yaml_model
 from ..errors import InputError
-from ..vocabulary import BIN_S
+from ..vocabulary import BIN_S, FORCE_GRADES
 
 Range = tuple[float, float]
 
@@ -44,7 +44,7 @@ class LevelsConfig(_Model):
     levels: list[int] | None = None
     """Levels to draw from (uniformly), e.g. [1, 6, 12]; null = all."""
     force_grades: list[str] = Field(
-        default=["light", "small", "small medium", "medium", "small big", "big"], min_length=1)
+        default_factory=lambda: list(FORCE_GRADES), min_length=1)
     """Grade names, lowest first, the levels split evenly among them (as the scene does);
     used unless the fits file's trials carry force_grade labels."""
 

@@ -63,7 +63,17 @@ def test_figures_of_one_kind_form_one_gallery_in_natural_order():
     assert [f.subject for f in slip.figures] == ["trial g1_level1", "trial g1_level2",
                                                  "trial g1_level10"]
     assert not slip.is_grid  # three figures are drawn as they are
-    assert [f.subject for f in galleries[1].figures] == ["force grade big", "force grade light"]
+    assert [f.subject for f in galleries[1].figures] == ["force grade light", "force grade big"]
+
+
+def test_fits_per_grade_go_lightest_first_and_other_names_after_them():
+    grades = ["big", "small_big", "medium", "small_medium", "small", "light"]
+    rels = [Path(f"fits/fos_press_{g}.png") for g in ["zzz", *grades, "all"]]
+    (fits,) = group_figures(rels)
+    assert [f.subject for f in fits.figures] == [
+        "force grade light", "force grade small", "force grade small medium",
+        "force grade medium", "force grade small big", "force grade big",
+        "force grade all", "force grade zzz"]
 
 
 def test_many_near_duplicates_are_one_grid_of_evenly_spread_figures():
