@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -96,10 +97,25 @@ def read_config_text(path: str | Path, what: str = "config file") -> str:
     return read_text(path, what)
 
 
+class _SafeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that also reads ``9e-6`` and ``1e3`` as numbers.
+
+    PyYAML follows YAML 1.1, whose floats need a dot (``9.0e-6``), so the ``9e-6`` people
+    write for a pixel pitch came back as the string ``"9e-06"``; YAML 1.2 and every other
+    parser read it as a float. Integers are still integers (their resolver comes first)."""
+
+
+_SafeLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
+
+
 def parse_yaml(text: str, path: str | Path) -> Any:
-    """``yaml.safe_load(text)``; a syntax error is an InputError at its line and column."""
+    """``yaml.safe_load(text)`` (with YAML 1.2's exponent floats, see :class:`_SafeLoader`);
+    a syntax error is an InputError at its line and column."""
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_SafeLoader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = None if mark is None else f"line {mark.line + 1}, column {mark.column + 1}"

@@ -1,0 +1,33 @@
+"""YAML configs are read the same way everywhere (tactile_cli.config_file)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tactile_cli.config_file import parse_yaml
+from tactile_cli.errors import InputError
+from tactile_cli.spatial import load_config
+
+
+def test_exponent_floats_without_a_dot_are_numbers():
+    # PyYAML (YAML 1.1) reads 9e-6 as a string; people write it for a pixel pitch
+    got = parse_yaml("a: 9e-6\nb: 9.0e-6\nc: 1e3\nd: -2E+2\ne: 12\nf: 1_000\ng: .5\n"
+                     "h: '9e-6'\ni: 1e\nj: e5\n", "x.yaml")
+    assert got == {"a": 9e-6, "b": 9e-6, "c": 1000.0, "d": -200.0, "e": 12, "f": 1000,
+                   "g": 0.5, "h": "9e-6", "i": "1e", "j": "e5"}
+    assert isinstance(got["c"], float) and isinstance(got["e"], int)
+
+
+def test_optics_written_with_exponents_are_read(tmp_path):
+    cfg = tmp_path / "optics.yaml"
+    cfg.write_text("version: 1\nsensor: {width_px: 640, height_px: 480}\n"
+                   "optics: {pixel_pitch_m: 9e-6, focal_length_m: 3.6e-3, "
+                   "strip_distance_m: 3e-2}\n")
+    optics = load_config(cfg).optics
+    assert (optics.pixel_pitch_m, optics.focal_length_m, optics.strip_distance_m) == \
+        (9e-6, 3.6e-3, 0.03)
+
+
+def test_python_tags_are_still_refused(tmp_path):
+    with pytest.raises(InputError, match="not valid YAML"):
+        parse_yaml("a: !!python/object/apply:os.system ['true']\n", tmp_path / "x.yaml")
