@@ -20,7 +20,7 @@ from tactile_cli.spatial import (
     roi_centroid_series,
     roi_weight_sums,
 )
-from tactile_cli.spatial.roi import subtract_background
+from tactile_cli.spatial.roi import drop_outside, subtract_background
 from tactile_cli.store.trials import TactileFile
 
 from ..factories.strip_events import OPTICS, STRIP_ROIS, H, W, make_strip_events, write_trials
@@ -78,6 +78,22 @@ def test_background_subtraction_is_exact_for_a_uniform_background():
     assert clean.tolist() == pytest.approx([4.0, 33.0])
     # more background than events: the bin is dropped, not given a wild centroid
     assert np.isnan(centroids_from_sums(subtract_background(sums, [roi], 2.0))).all()
+    # 50 events left over a background of 400 +- 20 keep their centroid (2.5 sd); the same
+    # 50 over a background of 1,600 +- 40 are within 2 sd of its counting noise: dropped
+    uniform = np.array([400.0, 400.0 * 4.5, 400.0 * 19.5])  # one event per pixel
+    assert np.isfinite(centroids_from_sums(subtract_background(sums, [roi], 1.0))).all()
+    noisier = sums + 3 * uniform
+    assert np.isnan(centroids_from_sums(subtract_background(noisier, [roi], 4.0))).all()
+
+
+def test_a_centroid_outside_its_roi_is_dropped_with_its_weight():
+    rois = (Roi("a", 0, 0, 10, 40), Roi("b", 20, 0, 30, 40))
+    centroid = np.array([[[4.0, 33.0], [25.0, 500.0]], [[-3.0, 10.0], [29.0, 39.0]]])
+    weight = np.array([[50.0, 0.05], [2.0, 7.0]])
+    c, w = drop_outside(centroid, weight, rois)
+    assert np.isnan(c[0, 1]).all() and np.isnan(c[1, 0]).all()
+    assert c[0, 0].tolist() == [4.0, 33.0] and c[1, 1].tolist() == [29.0, 39.0]
+    assert w.tolist() == [[50.0, 0.0], [0.0, 7.0]]
 
 
 def test_rois_must_lie_on_the_sensor():
