@@ -75,8 +75,9 @@ def monitor_command(
                                               "threshold, modes, commands; like Fig. 14) "
                                               "into this folder (created).",
                                               metavar="FOLDER")] = None,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing --plot folder.")
-                         ] = False,
+    overwrite: Annotated[bool, typer.Option(
+        help="Empty the --plot folder first (default: add the PNGs to it, replacing "
+        "same-named ones).")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
     progress: ProgressOption = None,
 ) -> None:
@@ -93,6 +94,10 @@ def monitor_command(
 
         if not file.exists():
             raise InputError("file not found", path=file)
+        if plot is not None:  # before the replay, which can take minutes
+            from ..store.outdir import check_output_folder
+
+            check_output_folder(plot, overwrite=overwrite, merge=not overwrite)
         import tempfile
 
         with tempfile.TemporaryDirectory(prefix="tactile-monitor-") as tmp, \
@@ -106,7 +111,7 @@ def monitor_command(
         if plot is not None:
             from ..store.outdir import output_folder
 
-            with output_folder(plot, overwrite=overwrite) as tmp:
+            with output_folder(plot, overwrite=overwrite, merge=not overwrite) as tmp:
                 for t in result.trials:
                     plot_trial(t, tmp / f"{t.trial}.png")
         if as_json:

@@ -147,6 +147,31 @@ def test_monitor_text_output_plot_and_motion_model(scene, tmp_path):
     assert "interferences caught" in res.output
     png = next((tmp_path / "plots").glob("*.png"))
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # another command's figure in the folder stays; --overwrite empties the folder first
+    (tmp_path / "plots" / "other.png").write_bytes(b"x")
+    res = runner.invoke(app, ["monitor", str(h5), "--plot", str(tmp_path / "plots"),
+                              "--mesh", "16x12"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "plots" / "other.png").exists() and png.exists()
+    res = runner.invoke(app, ["monitor", str(h5), "--plot", str(tmp_path / "plots"),
+                              "--mesh", "16x12", "--overwrite"])
+    assert res.exit_code == 0, res.output
+    assert not (tmp_path / "plots" / "other.png").exists() and png.exists()
+
+
+def test_monitor_refuses_a_plot_path_that_is_a_file_before_replaying(scene, tmp_path,
+                                                                     monkeypatch):
+    _, h5, _ = scene
+    import tactile_cli.visuotactile.monitor_replay as replay
+
+    def never(*a, **k):
+        raise AssertionError("replayed before the --plot check")
+
+    monkeypatch.setattr(replay, "monitor_file", never)
+    (tmp_path / "f").write_text("x")
+    res = runner.invoke(app, ["monitor", str(h5), "--plot", str(tmp_path / "f")])
+    assert res.exit_code == 2, res.output
+    assert "is a file; give a folder for the output" in res.output
 
 
 @pytest.mark.parametrize("args, message", [
