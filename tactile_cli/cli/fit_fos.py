@@ -295,8 +295,9 @@ def fit_fos_command(
                 raise InputError("--press-duration applies with --model pulse", path=files[0])
             _report(_fit_stream(hdf5[0]))
             return
-        if hdf5 and len(files) > 1:
-            # an unreadable file among tactile files is one of them: its task says why
+        if hdf5 and (len(files) > 1 or scheduler is not None or workers is not None):
+            # an unreadable file among tactile files is one of them: its task says why; one
+            # file with --scheduler/--workers (a glob that matched one) is a batch of one
             curves = [f for f in files if f.is_dir() or f.suffix.lower() == ".csv"]
             if curves:
                 other = curves[0]
@@ -306,7 +307,7 @@ def fit_fos_command(
             _fit_many(files)
             return
         if scheduler is not None or workers is not None:
-            raise InputError("--scheduler and --workers go with several HDF5 files (one "
+            raise InputError("--scheduler and --workers go with tactile HDF5 files (one "
                              "task per file)", path=files[0])
         if hdf5:
             file = hdf5[0]

@@ -97,9 +97,16 @@ def test_many_files_refuse_single_file_options(files, tmp_path):
     res = runner.invoke(app, ["fit-fos", *map(str, files), "--csv", str(tmp_path / "t.csv")])
     assert res.exit_code == 2
     assert "--csv goes with one HDF5 file" in res.stderr
-    res = runner.invoke(app, ["fit-fos", str(files[0]), "--workers", "2"])
+    # a glob that matched one file: a batch of one
+    res = runner.invoke(app, ["fit-fos", str(files[0]), "--workers", "0", "--no-order",
+                              "--overwrite"])
+    assert res.exit_code == 0, res.output
+    assert "1 ok, 0 skipped (up to date), 0 failed" in res.stdout
+    curve = tmp_path / "c.csv"
+    curve.write_text("t_s,x\n0,0\n0.1,1\n0.2,1.5\n0.3,1.8\n0.4,1.9\n")
+    res = runner.invoke(app, ["fit-fos", str(curve), "--model", "step", "--workers", "2"])
     assert res.exit_code == 2
-    assert "--scheduler and --workers go with several HDF5 files" in res.stderr
+    assert "--scheduler and --workers go with tactile HDF5 files" in res.stderr
     res = runner.invoke(app, ["fit-fos", str(files[0]), str(files[0])])
     assert res.exit_code == 2
     assert "given twice" in res.stderr
