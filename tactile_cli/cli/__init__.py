@@ -134,7 +134,7 @@ app.command("plot", help="Quick-look figures and an HTML page of tactile HDF5 fi
 app.command("accumulate", help="Event counts per 20 ms bin, moving average and action regions.")(
     _accumulate.accumulate_command
 )
-app.command("samples", help="Write small synthetic recordings of every input format.")(
+app.command("samples", help="Write small synthetic recordings of every input format but AEDAT4.")(
     _samples.samples_command
 )
 app.command("fit-fos", help="Fit FOS models (eqs. 16-17) to the press and slip regions.")(

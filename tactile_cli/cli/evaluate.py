@@ -275,8 +275,10 @@ def print_metrics(console: Console, result: EvalResult) -> None:
                           f"{fmt_interval(v['mean_probability_accuracy_ci95'])})")
     if result.cv:
         cv = result.cv
-        line = (f"{cv['n_folds']} folds ({cv['mode']}"
-                + (f" by {cv['by']}" if cv.get("by") else "") + "): accuracy per fold "
+        from ..learn.splits import fold_text
+
+        line = (fold_text(cv.get("k"), cv["n_folds"], cv["mode"], cv.get("by"))
+                + ": accuracy per fold "
                 f"{_pct(cv.get('accuracy_mean'))} +- {_pct(cv.get('accuracy_std'))}, macro F1 "
                 f"{_num(cv.get('macro_f1_mean'))} +- {_num(cv.get('macro_f1_std'))}")
         if cv.get("per_trial_accuracy_mean") is not None:

@@ -245,7 +245,7 @@ def taxel_slip_command(
     preset: Annotated[
         list[str] | None,
         typer.Option("--preset", help="Simulate only this sensor (biotac, capacitive, pvdf); "
-                     "repeatable. Default: the config's presets.", metavar="INPUT"),
+                     "repeatable. Default: the config's presets.", metavar="PRESET"),
     ] = None,
     trials: Annotated[
         int | None, typer.Option("--trials", min=1, help="Override trials_per_class (trials "

@@ -169,9 +169,11 @@ def _train_cv(cfg: TrainConfig, files: list[Path], run_dir: Path, cv: str, jobs:
     def on_plan(plan: FoldPlan, finished: list[int]) -> None:
         if as_json:
             return
-        by = f" by {plan.by}" if plan.by else ""
+        from ..learn.splits import fold_text
+
         again = f", {len(finished)} already finished (resuming)" if finished else ""
-        print(f"{cfg.model.family}: {len(plan.folds)} folds ({plan.mode}{by}){again}",
+        print(f"{cfg.model.family}: "
+              f"{fold_text(plan.k, len(plan.folds), plan.mode, plan.by)}{again}",
               file=sys.stderr, flush=True)
         for w in plan.warnings:
             print(f"tactile: warning: {w}", file=sys.stderr)

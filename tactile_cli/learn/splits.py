@@ -99,6 +99,12 @@ class FoldPlan:
                 "warnings": list(self.warnings)}
 
 
+def fold_text(k: int | str, n_folds: int, mode: str, by: str | None = None) -> str:
+    """``"5 folds (stratified by material)"``, or ``"7 folds (leave one trial out)"``."""
+    how = "leave one trial out" if k == "loto" else mode + (f" by {by}" if by else "")
+    return f"{n_folds} folds ({how})"
+
+
 # -- what a trial is, for a rule ---------------------------------------------------------------
 def _rank(seed: int, text: str) -> str:
     return hashlib.sha256(f"{seed}|{text}".encode()).hexdigest()
@@ -417,5 +423,5 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
 
 
 __all__ = ["SPLITS", "Fold", "FoldPlan", "SplitAssignment", "assign_splits", "cv_folds",
-           "default_by", "read_run_splits", "read_split_csv", "split_from_mapping",
+           "fold_text", "default_by", "read_run_splits", "read_split_csv", "split_from_mapping",
            "held_out_trials", "stratified_fold_of", "trial_class"]

@@ -168,3 +168,11 @@ def test_test_trials_prefer_the_run_s_recorded_split(tmp_path):
 def test_natural_order_of_classes():
     assert natural_sorted(["mat10", "mat2", "mat1", "10", "9"]) == \
         ["9", "10", "mat1", "mat2", "mat10"]
+
+
+def test_fold_text_names_leave_one_trial_out():
+    from tactile_cli.learn.splits import fold_text
+
+    assert fold_text("loto", 7, "random") == "7 folds (leave one trial out)"
+    assert fold_text(5, 5, "stratified", "material") == "5 folds (stratified by material)"
+    assert fold_text(4, 4, "random") == "4 folds (random)"
