@@ -19,8 +19,9 @@ def samples_command(
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same files).")] = 0,
     n_events: Annotated[int, typer.Option(min=1, help="Events per event recording.")] = 200_000,
 ) -> None:
-    """Write small synthetic recordings of every input format `tactile ingest` reads, and
-    print the command that ingests each."""
+    """Write small synthetic recordings of every input format `tactile ingest` reads but
+    AEDAT4 (a binary container this toolkit only reads), and print the command that
+    ingests each."""
 
     def body() -> None:
         from ..samples import write_all

@@ -22,7 +22,7 @@ EVENT_WIDTH, EVENT_HEIGHT = 640, 480
 
 
 def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) -> dict[str, Any]:
-    """Write one small recording of every input format under ``out_dir``.
+    """Write one small recording of every input format but AEDAT4 under ``out_dir``.
 
     Layout (the command that ingests each is in the returned ``commands``)::
 
