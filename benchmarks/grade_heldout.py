@@ -83,6 +83,20 @@ def _run(args: list[str], cwd: Path) -> str:
     return res.stdout
 
 
+def default_scene(seed: int, work: Path) -> tuple[Path, Path]:
+    """The default marker-event scene of ``seed`` simulated into ``work/sceneN`` and
+    ingested into ``work/sceneN.h5`` as `make demo-events` does: (folder, file)."""
+    scene = work / f"scene{seed}"
+    _run([TACTILE, "simulate", "marker-events", "--out", str(scene), "--seed", str(seed),
+          "--no-progress"], work)
+    h5 = work / f"scene{seed}.h5"
+    _run([TACTILE, "ingest", *map(str, sorted(scene.glob("*.npy"))), "--width", "640",
+          "--height", "480", "--annotations", str(scene / "annotations.csv"),
+          "--trial-labels", str(scene / "trials.csv"), "--out", str(h5), "--no-progress"],
+         work)
+    return scene, h5
+
+
 def scene_areas(seed: int, cache: Path) -> dict:
     """{"seed", "trials": [{trial, area, level, grade, alpha_press, ...}]} of one default
     scene, simulated, ingested and read by `tactile grade --json` (cached)."""
@@ -92,14 +106,7 @@ def scene_areas(seed: int, cache: Path) -> dict:
     cache.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=cache, prefix=f".seed{seed}-") as tmp:
         work = Path(tmp)
-        scene = work / f"scene{seed}"
-        _run([TACTILE, "simulate", "marker-events", "--out", str(scene), "--seed", str(seed),
-              "--no-progress"], work)
-        h5 = work / f"scene{seed}.h5"
-        _run([TACTILE, "ingest", *map(str, sorted(scene.glob("*.npy"))), "--width", "640",
-              "--height", "480", "--annotations", str(scene / "annotations.csv"),
-              "--trial-labels", str(scene / "trials.csv"), "--out", str(h5), "--no-progress"],
-             work)
+        scene, h5 = default_scene(seed, work)
         graded = json.loads(_run([TACTILE, "grade", str(h5), "--json"], work))
         import csv
 
