@@ -92,8 +92,8 @@ FRAME_BATCH_BYTES = 8 << 20
 _DIGITS = re.compile(r"([0-9]+)")
 _REFERENCE_HINT = ("name it reference.png (accepted names: "
                    + ", ".join(REFERENCE_STEMS) + " with suffix .png, .jpg or .jpeg), or "
-                   "pass --reference first (the first frame is the no-contact one) or "
-                   "--reference NAME")
+                   "pass `reference='first'` (the first frame is the no-contact one) or "
+                   "`reference=NAME`")
 
 
 @dataclass(frozen=True)

@@ -196,9 +196,9 @@ def test_missing_or_ambiguous_reference(tmp_path):
     truth["reference_file"].unlink()
     with pytest.raises(InputError, match=r"seq: no reference \(no-contact\) frame found; name it "
                                          r"reference\.png \(accepted names: reference, ref, "
-                                         r"background, no_contact.*, or pass --reference "
-                                         r"first \(the first frame is the no-contact one\) or "
-                                         r"--reference NAME$"):
+                                         r"background, no_contact.*, or pass "
+                                         r"`reference='first'` \(the first frame is the "
+                                         r"no-contact one\) or `reference=NAME`$"):
         ingest([tmp_path / "seq"], tmp_path / "o.h5")
     Image.fromarray(truth["reference"]).save(tmp_path / "seq" / "Background.png")
     Image.fromarray(truth["reference"]).save(tmp_path / "seq" / "no_contact.jpg")
