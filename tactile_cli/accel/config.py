@@ -15,6 +15,7 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..config_file import describe_key_first, load_yaml_model
+from ..errors import InputError
 
 
 class _Model(BaseModel):
@@ -135,9 +136,15 @@ class VibroSceneConfig(_Model):
 
     def with_duration(self, duration_s: float | None) -> VibroSceneConfig:
         """A copy with ``duration_s`` replaced (validated); unchanged for None."""
+        from pydantic import ValidationError
+
         if duration_s is None:
             return self
-        return VibroSceneConfig.model_validate({**self.model_dump(), "duration_s": duration_s})
+        try:
+            return VibroSceneConfig.model_validate({**self.model_dump(),
+                                                    "duration_s": duration_s})
+        except ValidationError as exc:  # the one key replaced: its error is the one shown
+            raise InputError(describe_key_first(exc.errors()[0])) from None
 
 
 def load_vibro_config(path: str | Path) -> VibroSceneConfig:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
@@ -31,11 +32,14 @@ def _ingested(folder: Path, tmp: Path) -> Path:
     scene = folder / "scene.json"
     if (folder / "trials").is_dir() and scene.is_file():
         try:
-            px = json.loads(scene.read_text(encoding="utf-8"))["optics"]["px_per_mm"]
+            px = float(json.loads(scene.read_text(encoding="utf-8"))["optics"]["px_per_mm"])
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise InputError(f"cannot read optics.px_per_mm ({exc})", path=scene) from None
+        if not (math.isfinite(px) and px > 0):
+            raise InputError(f"optics.px_per_mm is {px}; expected a positive number of "
+                             "pixels per mm", path=scene)
         labels, notes = folder / "trial_labels.csv", folder / "annotations.csv"
-        options = IngestOptions(format="images", px_per_mm=float(px),
+        options = IngestOptions(format="images", px_per_mm=px,
                                 trial_labels=labels if labels.is_file() else None,
                                 annotations=notes if notes.is_file() else None)
         inputs = folder / "trials"

@@ -439,6 +439,11 @@ class Frames:
         if self._images.ndim != 4 or self.t_s.shape != (self.n_frames,):
             raise _content_error(self.path, self.where, f"images {self._images.shape} and t_s "
                                  f"{self.t_s.shape} do not match (n_frames, height, width, 3)")
+        with _reading(self.path, f"{self.where}/reference"):
+            ref = self._group["reference"] if "reference" in self._group else None
+        if ref is not None and tuple(ref.shape) != self.shape:
+            raise _content_error(self.path, f"{self.where}/reference", f"is {tuple(ref.shape)}; "
+                                 f"the images are {self.shape} (height, width, 3)")
         if not np.isfinite(self.t_s).all() or (np.diff(self.t_s) < 0).any():
             raise _content_error(self.path, f"{self.where}/t_s", "frame times must be finite "
                                  "and must not decrease")

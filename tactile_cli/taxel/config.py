@@ -220,6 +220,15 @@ class FeatureConfig(_Model):
     sequential_correction: bool = True
     contact_estimation: bool = True
 
+    @model_validator(mode="after")
+    def _bands(self) -> FeatureConfig:
+        for preset, bands in self.bands_hz.items():
+            for name, (lo, hi) in bands.items():
+                if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+                    raise ValueError(f"band bands_hz.{preset}.{name} (={[lo, hi]}) must be "
+                                     "[low, high] Hz with 0 <= low < high")
+        return self
+
 
 def load_scene_config(path: str | Path) -> SceneConfig:
     """Read and validate a taxel-slip scene config (one :class:`InputError` line)."""

@@ -124,6 +124,10 @@ def read_preset_trials(tf: TactileFile, preset: str) -> PresetTrials:
         return np.stack([p[:n] for p in parts])
 
     labels = np.array([str(t.labels.get("slip", "")) for t in trials])
+    bad = sorted(set(labels.tolist()) - set(SLIP_TYPES))
+    if bad:
+        raise InputError(f"trial label slip has values {bad}; expected hand or world",
+                         path=tf.path)
     n_taxels = slip[0][0].shape[1]
     return PresetTrials(preset, tuple(t.name for t in trials), labels,
                         [stack(r) for r in rest], [stack(s) for s in slip], float(rate),
@@ -342,10 +346,6 @@ def slip_interface(path: str | Path, fcfg: FeatureConfig, *,
         progress.start(len(presets), "slip interface")
         for preset in presets:
             pt = read_preset_trials(tf, preset)
-            bad = sorted(set(pt.slip_type.tolist()) - set(SLIP_TYPES))
-            if bad:
-                raise InputError(f"trial label slip has values {bad}; expected hand or world",
-                                 path=tf.path)
             pf = preset_features(pt, fcfg)
             kept[preset] = pf
             d = pf.decided

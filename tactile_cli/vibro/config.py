@@ -79,6 +79,20 @@ def _default_contact() -> list[LinkConfig]:
             LinkConfig(between=("object", "skin_s"), stiffness_n_m=3.0e4, damping_n_s_m=0.6)]
 
 
+def _check_no_cycle(blocks: dict[str, BlockConfig]) -> None:
+    """The blocks hang from the ground as a tree: following parents from any block reaches
+    the ground (a ValueError naming a block of the loop otherwise)."""
+    for name in blocks:
+        seen = {name}
+        node = blocks[name].parent
+        while node != GROUND and node in blocks:
+            if node in seen:
+                raise ValueError(f"block {name!r}: its parents form a loop through {node!r}; "
+                                 f"every chain of parents must end at {GROUND!r}")
+            seen.add(node)
+            node = blocks[node].parent
+
+
 class ModelConfig(_Model):
     """The lumped-element model of the gripper, fingers and object (paper 003, Fig. 2)."""
 
@@ -106,6 +120,7 @@ class ModelConfig(_Model):
                                  f"nor {GROUND!r}")
             if block.parent == name:
                 raise ValueError(f"block {name!r} hangs from itself")
+        _check_no_cycle(self.blocks)
         for key in ("source", "sensor"):
             if getattr(self, key) not in names:
                 raise ValueError(f"`{key}` (={getattr(self, key)!r}) is not one of the blocks")

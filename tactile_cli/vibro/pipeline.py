@@ -120,6 +120,9 @@ def detect_trial(trial: Trial, cfg: DetectorConfig) -> TrialDetection:
     spectra, _ = trial_spectra(trial, cfg)
     labels = trial.labels
     scenario = str(labels.get("scenario", "contact"))
+    if scenario not in ("contact", "touch"):
+        raise InputError(f"trial label scenario is {scenario!r}; expected contact or touch",
+                         path=trial.path, where=f"{trial.where}/labels")
     where = f"{trial.where}/signals"
     try:
         if scenario == "touch":

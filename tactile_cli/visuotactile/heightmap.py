@@ -22,6 +22,7 @@ measured next to its speed by ``benchmarks/heightmap.py``.
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -94,6 +95,10 @@ def frames_px_per_mm(tf: TactileFile, trial: Trial, px_per_mm: float | None) -> 
         raise InputError(f"sensor {name!r} has no px_per_mm attribute; ingest the images with "
                          "`tactile ingest --px-per-mm` or pass `px_per_mm`", path=tf.path,
                          where=f"/sensors/{name}")
+    if not (isinstance(value, int | float | np.integer | np.floating)
+            and not isinstance(value, bool) and np.isfinite(value) and value > 0):
+        raise InputError(f"px_per_mm is {value!r}; expected a positive number", path=tf.path,
+                         where=f"/sensors/{name}")
     return float(value)
 
 
@@ -124,12 +129,18 @@ def load_truth(truth_dir: Path, trial: str, shape: tuple[int, ...]) -> np.ndarra
     if not path.is_file():
         raise InputError(f"no ground truth for trial {trial!r} (expected {path.name} from "
                          "`tactile simulate digit-press`)", path=truth_dir)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            truth = np.asarray(z["height_mm"], dtype=np.float32)
-    except (OSError, ValueError, KeyError) as exc:
-        raise InputError(f"not a truth file with height_mm ({str(exc).splitlines()[0]})",
-                         path=path) from None
+    try:  # the file opened here, so that numpy's errors on a damaged archive close it
+        with open(path, "rb") as fh:
+            z = np.load(fh, allow_pickle=False)
+            if not hasattr(z, "files"):
+                raise ValueError("a .npy array, not an .npz archive")
+            with z:
+                truth = np.asarray(z["height_mm"], dtype=np.float32)
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        reason = (str(exc).splitlines() or [type(exc).__name__])[0]
+        raise InputError(f"not a truth file with height_mm ({reason})", path=path) from None
+    if not np.isfinite(truth).all():
+        raise InputError("height_mm holds NaN or infinite heights", path=path)
     if truth.shape != shape:
         raise InputError(f"height_mm has shape {truth.shape}; the trial's height maps are "
                          f"{shape}", path=path)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import json
 import time
+import zipfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -360,12 +361,16 @@ def _write_csv(path: Path, header: tuple[str, ...], rows: list[list[Any]]) -> No
 def read_truth(path: str | Path) -> dict[str, np.ndarray]:
     """The arrays of one ``truth/<trial>.npz`` (InputError naming the file if unreadable)."""
     path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read the scene truth ({' '.join(str(exc).split())})",
-                         path=path) from None
+    try:  # the file opened here, so that numpy's errors on a damaged archive close it
+        with open(path, "rb") as fh:
+            z = np.load(fh, allow_pickle=False)
+            if not hasattr(z, "files"):
+                raise ValueError("a .npy array, not an .npz archive")
+            with z:
+                return {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"cannot read the scene truth ({reason})", path=path) from None
 
 
 __all__ = ["CALIBRATION_LABELS", "TRIAL_LABELS", "DigitSceneResult", "PressPlan", "TrialPlan",

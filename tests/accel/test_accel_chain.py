@@ -243,3 +243,13 @@ def test_the_shipped_scene_config_repeats_the_defaults():
 
     path = Path(__file__).resolve().parents[2] / "configs" / "scene_vibro_slip.yaml"
     assert load_vibro_config(path) == VibroSceneConfig()
+
+
+def test_an_absurd_duration_override_is_one_input_error():
+    """Found by the damaged-input corpus: `simulate vibro-slip --duration 1e9` ended in a
+    pydantic traceback."""
+    from tactile_cli.errors import InputError
+
+    with pytest.raises(InputError, match="duration_s"):
+        _small().with_duration(1e9)
+    assert _small().with_duration(1.5).duration_s == 1.5

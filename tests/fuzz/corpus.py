@@ -92,7 +92,8 @@ TINY_TRAIN = {
 
 
 def build_bases(root: Path) -> Path:
-    """Valid inputs under ``root/base`` (built once; about 20 s). Returns that folder."""
+    """Valid inputs under ``root/base`` (built once; about 20 s, and about 40 s more for
+    the sensor chains, see chains.py). Returns that folder."""
     base = root / "base"
     if (base / ".complete").exists():
         return base
@@ -152,6 +153,9 @@ def build_bases(root: Path) -> Path:
               "--out", str(base / "run"), "--no-progress"], base)
     _tactile(["evaluate", str(base / "run"), "--data", str(h5 / "counts.h5"),
               "--no-latency", "--name", "counts"], base)
+    from .chains import build_chain_bases
+
+    build_chain_bases(base, _tactile, REPO)
     (base / ".complete").write_text("ok\n")
     return base
 
@@ -197,7 +201,10 @@ def _decodes_as_before(base: Path, damaged: Path, mutation: str) -> bool:
     the decoder never reads, such as code lengths of unused symbols), and zlib's checksum
     covers the decoded data, not the stream: such a file holds no corrupt data, so
     accepting it is right (seen once, in the t column of events_csv.h5, seed 0)."""
-    ds = mutation.split("flip-chunk", 1)[1].rsplit("-", 1)[0].replace(".", "/")
+    dotted = mutation.split("flip-chunk", 1)[1].rsplit("-", 1)[0]
+    # the dataset whose path, dots for slashes, the mutation names (trial names may hold dots)
+    ds = next((d for d in _chunk_ranges(base) if d.replace("/", ".") == dotted),
+              dotted.replace(".", "/"))
     try:
         with h5py.File(base, "r") as fb, h5py.File(damaged, "r") as fd:
             return bool(np.array_equal(fb[ds][()], fd[ds][()]))
@@ -545,6 +552,21 @@ def _yaml_set(p: Path, dotted: str, value, raw: bool = False) -> None:
 
 # ---------------------------------------------------------------- command tables
 
+#: chain commands that read every trial's stream, frames, annotations of the file
+_SIGNAL_READERS = {"accel-prepare", "features", "detect-delay", "slip-interface",
+                   "detect-contact", "slip-signal"}
+_FRAME_READERS = {"normal-labels", "heightmap", "slip-signal", "monitor"}
+# detect-contact scores contact trials (the first is one) by their label contact_s and
+# reads annotations of touch trials only
+_ANNOTATION_READERS = {"slip-interface"}
+
+
+def _chain_readers() -> dict[str, set[str]]:
+    from .chains import EXTRA_READERS
+
+    return EXTRA_READERS
+
+
 #: role of the damage -> commands that read it (and so must refuse); "*" every command
 H5_READERS = {
     "root": "*",
@@ -555,17 +577,23 @@ H5_READERS = {
     "labels": {"validate"},
     "events": {"validate", "plot", "accumulate", "fit-fos", "frames", "centroids", "slip-rate",
                "grade", "train", "evaluate"},
-    "signal": {"validate", "plot", "grade", "train", "evaluate", "perturb"},
-    "channels": {"validate", "plot", "train", "evaluate", "perturb", "grade"},
-    "sample_labels": {"validate", "train", "evaluate", "perturb"},
+    "signal": {"validate", "plot", "grade", "train", "evaluate", "perturb",
+               *_SIGNAL_READERS},
+    "channels": {"validate", "plot", "train", "evaluate", "perturb", "grade",
+                 *_SIGNAL_READERS},
+    "sample_labels": {"validate", "train", "evaluate", "perturb", "detect-delay",
+                      "features"},
     "events_other": {"validate", "accumulate", "fit-fos", "frames", "centroids", "slip-rate",
                      "grade", "train", "evaluate"},
-    "signal_other": {"validate", "grade", "train", "evaluate", "perturb"},
-    "frames_other": {"validate"},
-    "label_target": {"train", "evaluate", "perturb"},  # the runs' classification target
-    "annotations": {"validate", "slip-rate", "fit-fos"},
-    "frames": {"validate", "plot"},
+    "signal_other": {"validate", "grade", "train", "evaluate", "perturb",
+                     *_SIGNAL_READERS},
+    "frames_other": {"validate", *_FRAME_READERS},
+    # the runs' classification target
+    "label_target": {"train", "evaluate", "perturb", "detect-delay"},
+    "annotations": {"validate", "slip-rate", "fit-fos", *_ANNOTATION_READERS},
+    "frames": {"validate", "plot", *_FRAME_READERS},
     "meta": set(),  # a flipped byte in metadata may land in free space
+    **_chain_readers(),
 }
 
 H5_COMMANDS = {
@@ -603,6 +631,44 @@ H5_COMMANDS = {
               ("plot", ["plot", "{IN}", "--out", "{OUT}/plot", "--max-trials", "1"])]
        for kind in ("events_csv", "accel", "taxel", "visuo")},
 }
+# the sensor chains: their commands on the ingested kinds above and on their own files
+H5_COMMANDS["accel"] += [
+    ("accel-prepare", ["accel-prepare", "{IN}", "--segment-s", "0.02", "--out", "{OUT}/p.h5",
+                       "--no-progress"]),
+    ("features", ["features", "spectral", "{IN}", "--stream", "accel", "--window-s", "0.01",
+                  "--hop-s", "0.005", "--nperseg", "16", "--out", "{OUT}/f.h5",
+                  "--no-progress"])]
+H5_COMMANDS["taxel"] += [
+    ("features", ["features", "spectral", "{IN}", "--stream", "taxels", "--window-s", "0.2",
+                  "--hop-s", "0.1", "--nperseg", "8", "--out", "{OUT}/f.h5", "--no-progress"])]
+H5_COMMANDS["visuo"] += [
+    ("slip-signal", ["slip-signal", "{IN}", "--source", "intensity", "--n-static", "3",
+                     "--no-progress"]),
+    ("monitor", ["monitor", "{IN}", "--n-static", "3", "--no-progress"])]
+_CHECK = [("info", ["info", "{IN}"]), ("validate", ["validate", "{IN}"])]
+H5_COMMANDS.update({
+    "prepared": [*_CHECK, ("detect-delay", [
+        "detect-delay", "{BASE}/chains/run_vibro", "--data", "{IN}", "--split", "all",
+        "--json"])],
+    "taxel_scene": [*_CHECK,
+                    ("slip-interface", ["slip-interface", "{IN}", "--folds", "2", "--json",
+                                        "--no-progress"]),
+                    ("features", ["features", "spectral", "{IN}", "--out", "{OUT}/f.h5",
+                                  "--no-progress"])],
+    "vibrotouch": [*_CHECK, ("detect-contact", ["detect-contact", "{IN}", "--json"])],
+    "calib": [*_CHECK, ("normal-labels", ["normal-labels", "{IN}", "--out", "{OUT}/p.h5",
+                                          "--flat-per-press", "200", "--no-progress"])],
+    "press": [*_CHECK,
+              ("heightmap", ["heightmap", "{IN}", "--model", "{BASE}/chains/run_normals",
+                             "--workers", "1", "--out", "{OUT}/h.h5", "--no-progress"]),
+              ("slip-signal", ["slip-signal", "{IN}", "--source", "intensity",
+                               "--no-progress"]),
+              ("monitor", ["monitor", "{IN}", "--no-progress"])],
+    "heightmap": [*_CHECK, ("slip-signal", ["slip-signal", "{IN}", "--json",
+                                            "--no-progress"])],
+})
+#: the HDF5 kinds of the sensor chains (base/h5/<kind>.h5)
+CHAIN_KINDS = ("prepared", "taxel_scene", "vibrotouch", "calib", "press", "heightmap")
 
 
 @dataclass
@@ -654,16 +720,20 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
                                  tuple(clash)))
 
     # HDF5 files of each kind, damaged, then every command of that kind on them
-    for kind in ("events", "counts", "events_csv", "accel", "taxel", "visuo"):
+    from .chains import add_chain_cases, extra_h5_mutations, harmless_for
+
+    for kind in ("events", "counts", "events_csv", "accel", "taxel", "visuo", *CHAIN_KINDS):
         src = base / "h5" / f"{kind}.h5"
-        for mutation, role, apply, harmless in _h5_mutations(src, rng, n_random):
+        for mutation, role, apply, harmless in [*_h5_mutations(src, rng, n_random),
+                                                *extra_h5_mutations(kind, src)]:
             d = add(kind, src, f"{kind}.h5", mutation, role, apply, harmless)
             if mutation.startswith("flip-chunk") and _decodes_as_before(
                     src, corpus_dir / d.name / d.entry, mutation):
                 d.harmless = harmless = True  # see _decodes_as_before
             readers = H5_READERS[role]
             for command, argv in H5_COMMANDS[kind]:
-                must = readers == "*" or command in readers
+                must = (readers == "*" or command in readers) and not harmless_for(
+                    kind, role, mutation, command)
                 case(d, command, argv, REFUSE if must and not harmless else EITHER)
 
     raw = base / "raw"
@@ -942,6 +1012,8 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         os.symlink("loop", loop)
     for command, argv in loop_cmds:
         case(d, command, [a if a not in ("{RUN}",) else "{IN}" for a in argv], REFUSE)
+
+    add_chain_cases(add, case, base, rng)
 
     if fresh:
         (corpus_dir / ".complete").write_text("ok\n")

@@ -132,3 +132,20 @@ def test_writer_schema_error_is_one_line(tmp_path):
         w.commit()
     assert "\n" not in str(exc.value) and "force_level" in str(exc.value)
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_a_reference_frame_of_another_size_is_one_input_error(tmp_path):
+    """Found by the damaged-input corpus: a reference frame cut to half its rows reached
+    normal-labels, heightmap, slip-signal and monitor as a numpy broadcast traceback."""
+    from tests.factories.gel_frames import make_frames_file
+
+    path = tmp_path / "f.h5"
+    make_frames_file(path, n_trials=1, n_frames=3, onset_frame=1)
+    with h5py.File(path, "r+") as f:
+        ref = f["trials/t_00/frames/reference"][()]
+        del f["trials/t_00/frames/reference"]
+        f["trials/t_00/frames/reference"] = ref[: ref.shape[0] // 2]
+    with TactileFile(path) as tf, pytest.raises(InputError) as err:
+        tf.trial("t_00").frames()
+    assert "/trials/t_00/frames/reference" in str(err.value)
+    assert "\n" not in str(err.value)

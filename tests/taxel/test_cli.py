@@ -54,3 +54,31 @@ def test_bad_inputs_are_one_line_errors(tmp_path, taxel_file):
     res = runner.invoke(app, ["slip-interface", str(taxel_file), "--config", str(cfg)])
     assert res.exit_code == 2 and "window" in res.output
     assert len(res.output.strip().splitlines()) == 1
+
+
+def test_reversed_bands_and_unknown_slip_labels_are_one_line_errors(tmp_path):
+    """Found by the damaged-input corpus: a band [300, 10] was accepted, and `features
+    spectral` met a slip label other than hand or world as a ValueError traceback."""
+    import shutil
+
+    import h5py
+
+    scene = tmp_path / "s.h5"
+    res = runner.invoke(app, ["simulate", "taxel-slip", "--out", str(scene), "--preset",
+                              "pvdf", "--trials", "2", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    cfg = tmp_path / "bands.yaml"
+    cfg.write_text("bands_hz:\n  pvdf: {low: [300.0, 10.0]}\n")
+    res = runner.invoke(app, ["slip-interface", str(scene), "--config", str(cfg)])
+    assert res.exit_code == 2 and "bands_hz.pvdf.low" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    bad = tmp_path / "bad.h5"
+    shutil.copyfile(scene, bad)
+    with h5py.File(bad, "r+") as f:
+        f[f"trials/{sorted(f['trials'])[0]}/labels"].attrs["slip"] = "sideways"
+    for argv in (["features", "spectral", str(bad), "--out", str(tmp_path / "f.h5")],
+                 ["slip-interface", str(bad), "--folds", "2"]):
+        res = runner.invoke(app, [*argv, "--no-progress"])
+        assert res.exit_code == 2 and "sideways" in res.output, res.output
+        assert len(res.output.strip().splitlines()) == 1
+    assert not (tmp_path / "f.h5").exists()

@@ -84,3 +84,16 @@ def test_config_errors_name_the_file_and_key(tmp_path):
     with pytest.raises(InputError, match="parent 'nowhere' is neither a block"):
         load_model_config(bad)
     assert load_model_config("configs/vibro_model.yaml") == ModelConfig()
+
+
+def test_blocks_whose_parents_form_a_loop_are_refused(tmp_path):
+    """Found by the damaged-input corpus: a loop of parents (a -> b -> a) is no tree hung
+    from the ground, and was accepted."""
+    bad = tmp_path / "m.yaml"
+    bad.write_text("blocks:\n  g: {mass_kg: 1, stiffness_n_m: 10}\n"
+                   "  a: {mass_kg: 1, stiffness_n_m: 10, parent: b}\n"
+                   "  b: {mass_kg: 1, stiffness_n_m: 10, parent: a}\nsource: g\n"
+                   "sensor: a\ncontact: []\n")
+    with pytest.raises(InputError, match="parents form a loop") as err:
+        load_model_config(bad)
+    assert str(bad) in str(err.value) and "\n" not in str(err.value)

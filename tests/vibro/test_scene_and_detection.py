@@ -191,3 +191,21 @@ def test_follow_reads_a_file_while_it_grows(tmp_path):
                                                   follow_s=0.3, poll_s=0.002)))
     writer.join()
     np.testing.assert_allclose(values, [0.5, 1.5, 0.25, 1.25, 2.25, 3.25, 4.25])
+
+
+def test_an_unknown_scenario_label_is_one_input_error(scene, tmp_path):
+    """Found by the damaged-input corpus: a scenario label other than contact or touch was
+    scored as a contact trial without a word."""
+    import shutil
+
+    import h5py
+
+    path, _ = scene
+    bad = tmp_path / "s.h5"
+    shutil.copyfile(path, bad)
+    with h5py.File(bad, "r+") as f:
+        first = sorted(f["trials"])[0]
+        f[f"trials/{first}/labels"].attrs["scenario"] = "party"
+    result = runner.invoke(app, ["detect-contact", str(bad)])
+    assert result.exit_code == 2 and "scenario is 'party'" in result.output
+    assert len(result.output.strip().splitlines()) == 1

@@ -111,3 +111,42 @@ def test_errors(scene: dict[str, Path], tmp_path: Path) -> None:
     assert not (tmp_path / "y.h5").exists()
     with pytest.raises(InputError, match="not a run folder"):
         heightmap_file(scene["frames"], tmp_path, tmp_path / "z.h5")
+
+
+@pytest.mark.parametrize("damage", ["empty", "truncated", "nan"])
+def test_a_damaged_truth_file_is_one_input_error(scene: dict[str, Path], tmp_path: Path,
+                                                 damage: str) -> None:
+    """Found by the damaged-input corpus: an empty .npz gave click's `Aborted.` (EOFError),
+    a cut one a BadZipFile traceback, NaN heights a TypeError when the RMSE was printed."""
+    from tactile_cli.visuotactile.heightmap import load_truth
+
+    src = scene["truth"] / "t_00.npz"
+    bad = tmp_path / "t_00.npz"
+    with np.load(src) as z:
+        heights = z["height_mm"]
+    if damage == "empty":
+        bad.write_bytes(b"")
+    elif damage == "truncated":
+        bad.write_bytes(src.read_bytes()[: src.stat().st_size // 2])
+    else:
+        np.savez(bad, height_mm=heights * np.nan)
+    with pytest.raises(InputError) as err:
+        load_truth(tmp_path, "t_00", heights.shape)
+    assert str(bad) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_text_px_per_mm_attribute_is_one_input_error(scene: dict[str, Path],
+                                                       tmp_path: Path) -> None:
+    """Found by the damaged-input corpus: px_per_mm = 'wide' ended in a ValueError."""
+    import shutil
+
+    import h5py
+
+    from tactile_cli.visuotactile.heightmap import frames_px_per_mm
+
+    bad = tmp_path / "f.h5"
+    shutil.copyfile(scene["frames"], bad)
+    with h5py.File(bad, "r+") as f:
+        f["sensors/digit"].attrs["px_per_mm"] = "wide"
+    with TactileFile(bad) as tf, pytest.raises(InputError, match="px_per_mm is 'wide'"):
+        frames_px_per_mm(tf, tf.trial("t_00"), None)

@@ -209,3 +209,17 @@ def test_hold_timer_is_not_moved_by_rounded_frame_times():
     mon.step(6.966667, 209, 5.0)
     assert 9.966667 - 6.966667 < 3.0
     assert kinds(mon.step(9.966667, 299, 0.0)) == ["no_slip", "release_grip"]
+
+
+@pytest.mark.parametrize("px", ["NaN", "-16", "\"wide\""])
+def test_a_scene_folder_with_a_bad_px_per_mm_is_one_input_error(tmp_path, px):
+    """Found by the damaged-input corpus: `tactile monitor SCENE` took optics.px_per_mm NaN
+    from scene.json without a word (and a text value ended in a ValueError)."""
+    from tactile_cli.cli.monitor import _ingested
+    from tactile_cli.errors import InputError
+
+    (tmp_path / "trials").mkdir()
+    (tmp_path / "scene.json").write_text('{"optics": {"px_per_mm": ' + px + '}}')
+    with pytest.raises(InputError, match="px_per_mm") as err:
+        _ingested(tmp_path, tmp_path)
+    assert "scene.json" in str(err.value) and "\n" not in str(err.value)
