@@ -233,3 +233,18 @@ def test_frames_bad_input_is_one_line_exit_2(strip_file, tmp_path, args, message
     assert result.exit_code == 2
     assert result.stderr.strip() == f"tactile: error: {message.format(**subst)}"
     assert not (tmp_path / "o").exists()
+
+
+def test_eq21_end_weights_in_blocks_equal_the_full_operator():
+    from tactile_cli.spatial.slip_rate import (
+        _end_weights,
+        centroid_velocity,
+        integrate_displacement,
+    )
+
+    t = np.sort(np.random.default_rng(0).uniform(0.0, 2.0, 300))
+    full = integrate_displacement(t, centroid_velocity(t, np.eye(t.size)))[-1]
+    assert np.array_equal(_end_weights(t, block=7), full)
+    y = np.random.default_rng(1).normal(size=t.size)
+    assert _end_weights(t) @ y == pytest.approx(
+        integrate_displacement(t, centroid_velocity(t, y))[-1])
