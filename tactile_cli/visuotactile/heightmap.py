@@ -22,7 +22,6 @@ measured next to its speed by ``benchmarks/heightmap.py``.
 
 from __future__ import annotations
 
-import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,16 +128,13 @@ def load_truth(truth_dir: Path, trial: str, shape: tuple[int, ...]) -> np.ndarra
     if not path.is_file():
         raise InputError(f"no ground truth for trial {trial!r} (expected {path.name} from "
                          "`tactile simulate digit-press`)", path=truth_dir)
-    try:  # the file opened here, so that numpy's errors on a damaged archive close it
-        with open(path, "rb") as fh:
-            z = np.load(fh, allow_pickle=False)
-            if not hasattr(z, "files"):
-                raise ValueError("a .npy array, not an .npz archive")
-            with z:
-                truth = np.asarray(z["height_mm"], dtype=np.float32)
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
-        reason = (str(exc).splitlines() or [type(exc).__name__])[0]
-        raise InputError(f"not a truth file with height_mm ({reason})", path=path) from None
+    from .simulate import read_truth
+
+    arrays = read_truth(path)
+    if "height_mm" not in arrays:
+        raise InputError("not a truth file with height_mm (no height_mm array in it)",
+                         path=path)
+    truth = np.asarray(arrays["height_mm"], dtype=np.float32)
     if not np.isfinite(truth).all():
         raise InputError("height_mm holds NaN or infinite heights", path=path)
     if truth.shape != shape:
