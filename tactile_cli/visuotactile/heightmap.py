@@ -134,7 +134,11 @@ def load_truth(truth_dir: Path, trial: str, shape: tuple[int, ...]) -> np.ndarra
     if "height_mm" not in arrays:
         raise InputError("not a truth file with height_mm (no height_mm array in it)",
                          path=path)
-    truth = np.asarray(arrays["height_mm"], dtype=np.float32)
+    try:
+        truth = np.asarray(arrays["height_mm"], dtype=np.float32)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"not a truth file with height_mm ({str(exc).splitlines()[0]})",
+                         path=path) from None
     if not np.isfinite(truth).all():
         raise InputError("height_mm holds NaN or infinite heights", path=path)
     if truth.shape != shape:
