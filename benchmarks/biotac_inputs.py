@@ -72,7 +72,7 @@ from tactile_cli.learn.trial_metrics import (  # noqa: E402
     per_trial_confusion,
     trial_votes,
 )
-from tactile_cli.store.writer import sha256_of, utc_now  # noqa: E402
+from tactile_cli.store.provenance import sha256_of, utc_now  # noqa: E402
 
 CFG_DIR = ROOT / "configs" / "biotac_inputs"
 FAMILIES = ("fnn", "lstm", "cnn2d", "mlp")
@@ -384,7 +384,8 @@ def compare_chart(results: dict[str, dict[str, Any]], path: Path) -> dict[str, A
     """``tactile compare`` of the single-input runs by per-trial accuracy (majority vote, as
     evaluate reports it) against latency, intervals drawn; None if compare refuses."""
     from tactile_cli.errors import InputError
-    from tactile_cli.learn.compare import compare, plot_comparison, write_atomic
+    from tactile_cli.learn.compare import compare, plot_comparison
+    from tactile_cli.store.atomic import write_bytes
 
     try:
         cmp = compare([r["run_dir"] for r in results.values()], metric="trial_accuracy",
@@ -392,8 +393,9 @@ def compare_chart(results: dict[str, dict[str, Any]], path: Path) -> dict[str, A
     except InputError as exc:
         print(f"compare: {exc}", file=sys.stderr)
         return None
-    write_atomic(path, plot_comparison(cmp, title="tactile compare: per-trial accuracy "
-                                       "(majority) against latency, 95 % intervals"))
+    write_bytes(path, plot_comparison(cmp, title="tactile compare: per-trial accuracy "
+                                       "(majority) against latency, 95 % intervals"),
+                overwrite=True)
     return {"needed_within_5pp": cmp.needed.label, "best": cmp.best.label,
             "summary": cmp.summary()}
 

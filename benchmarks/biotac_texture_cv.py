@@ -39,7 +39,7 @@ from tactile_cli._version import __version__  # noqa: E402
 from tactile_cli.learn import load_config, runs  # noqa: E402
 from tactile_cli.learn.cv import train_cv  # noqa: E402
 from tactile_cli.learn.evaluate import evaluate  # noqa: E402
-from tactile_cli.store.writer import sha256_of, utc_now  # noqa: E402
+from tactile_cli.store.provenance import sha256_of, utc_now  # noqa: E402
 
 MODELS = ("cnn2d", "mlp")
 

@@ -311,7 +311,7 @@ def write_config(calibrate_seeds: list[int], cache: Path, path: Path) -> Path:
     areas and :class:`AreaCalibrator` as `tactile grade s*.h5 --calibrate`)."""
     from tactile_cli._version import __version__
     from tactile_cli.grade import save_config
-    from tactile_cli.store.writer import utc_now
+    from tactile_cli.store.provenance import utc_now
 
     clash = sorted(set(calibrate_seeds) & USED_SEEDS)
     if clash:

@@ -164,8 +164,8 @@ def _window_reads(path: Path, n_windows: int = 20, window_ms: int = 50) -> dict[
 
 def _serial_parts(work: Path) -> dict[str, float]:
     """Seconds of the single-threaded steps every tactile ingest ends or starts with."""
+    from tactile_cli.store.provenance import sha256_of
     from tactile_cli.store.validate import validate_file
-    from tactile_cli.store.writer import sha256_of
 
     out = {}
     for key, step in (("validate_s", lambda: validate_file(work / "npy.h5")),

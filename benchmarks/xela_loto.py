@@ -47,7 +47,7 @@ from tactile_cli.learn import load_config, runs  # noqa: E402
 from tactile_cli.learn.compare import RunPoint, compare_points, plot_comparison  # noqa: E402
 from tactile_cli.learn.cv import train_cv  # noqa: E402
 from tactile_cli.learn.evaluate import evaluate  # noqa: E402
-from tactile_cli.store.writer import sha256_of, utc_now  # noqa: E402
+from tactile_cli.store.provenance import sha256_of, utc_now  # noqa: E402
 
 FAMILIES = ("lstm", "cnn1d", "fnn", "mlp")
 SLIP = "slip"

@@ -24,6 +24,7 @@ from typing import Any
 import yaml
 
 from .errors import InputError
+from .input_guard import note_input
 
 
 def missing_file_error(path: str | Path, what: str = "file") -> InputError:
@@ -80,9 +81,11 @@ def decode_utf8(data: bytes, path: str | Path, *, first_line: int = 1,
 def read_bytes(path: str | Path, what: str = "file") -> bytes:
     """The bytes of ``path``; a file that cannot be read is one :class:`InputError`."""
     try:
-        return Path(path).read_bytes()
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise os_error(exc, path, what) from None
+    note_input(path, tree=False)
+    return data
 
 
 def read_text(path: str | Path, what: str = "file", *,
@@ -111,11 +114,68 @@ _SafeLoader.add_implicit_resolver(
     list("-+0123456789"))
 
 
-def parse_yaml(text: str, path: str | Path) -> Any:
-    """``yaml.safe_load(text)`` (with YAML 1.2's exponent floats, see :class:`_SafeLoader`);
-    a syntax error is an InputError at its line and column."""
+#: Deepest nesting of lists and mappings a config, sidecar or JSON record may have. The
+#: toolkit's own formats need fewer than 10 levels; a file nested thousands deep would
+#: exhaust the parser's recursion (a traceback) or the checks that walk it.
+MAX_NESTING = 64
+
+
+def nesting_depth(value: Any) -> int:
+    """Levels of lists, tuples and mappings in ``value`` (a scalar is 0), walked without
+    recursion, stopping once past :data:`MAX_NESTING`."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, Mapping):
+            children = list(item.values())
+        elif isinstance(item, list | tuple):
+            children = list(item)
+        else:
+            continue
+        deepest = max(deepest, depth)
+        if deepest > MAX_NESTING:
+            break
+        stack.extend((c, depth + 1) for c in children)
+    return deepest
+
+
+def check_nesting(value: Any, path: str | Path) -> Any:
+    """``value`` if it is nested at most :data:`MAX_NESTING` deep; else an InputError."""
+    if nesting_depth(value) > MAX_NESTING:
+        raise InputError(f"is nested more than {MAX_NESTING} levels deep; no file of the "
+                         "toolkit needs that many: check the file", path=Path(path))
+    return value
+
+
+def _too_deep(path: str | Path) -> InputError:
+    return InputError(f"is nested more than {MAX_NESTING} levels deep (the parser ran out of "
+                      "recursion); check the file", path=Path(path))
+
+
+def parse_json(text: str, path: str | Path) -> Any:
+    """``json.loads(text)`` bounded in nesting (:data:`MAX_NESTING`); text that is not JSON
+    is an InputError at its line and column."""
+    import json
+
     try:
-        return yaml.load(text, Loader=_SafeLoader)  # noqa: S506 (a SafeLoader subclass)
+        value = json.loads(text)
+    except RecursionError:
+        raise _too_deep(path) from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg})", path=Path(path),
+                         where=f"line {exc.lineno}, column {exc.colno}") from None
+    return check_nesting(value, path)
+
+
+def parse_yaml(text: str, path: str | Path) -> Any:
+    """``yaml.safe_load(text)`` (with YAML 1.2's exponent floats, see :class:`_SafeLoader`),
+    bounded in nesting (:data:`MAX_NESTING`); a syntax error is an InputError at its line
+    and column."""
+    try:
+        return check_nesting(yaml.load(text, Loader=_SafeLoader), path)  # noqa: S506
+    except RecursionError:
+        raise _too_deep(path) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = None if mark is None else f"line {mark.line + 1}, column {mark.column + 1}"

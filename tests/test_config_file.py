@@ -31,3 +31,26 @@ def test_optics_written_with_exponents_are_read(tmp_path):
 def test_python_tags_are_still_refused(tmp_path):
     with pytest.raises(InputError, match="not valid YAML"):
         parse_yaml("a: !!python/object/apply:os.system ['true']\n", tmp_path / "x.yaml")
+
+
+# -- nesting bounded (issue 33) ------------------------------------------------------------
+def test_yaml_and_json_nested_thousands_deep_are_one_error(tmp_path):
+    from tactile_cli.config_file import MAX_NESTING, parse_json, parse_yaml
+
+    deep = "[" * 20000 + "]" * 20000
+    for parse in (parse_yaml, parse_json):
+        with pytest.raises(InputError, match=f"nested more than {MAX_NESTING} levels deep"):
+            parse(deep, tmp_path / "deep.txt")
+
+
+def test_nesting_up_to_the_bound_is_read(tmp_path):
+    from tactile_cli.config_file import MAX_NESTING, nesting_depth, parse_json, parse_yaml
+
+    ok = "[" * MAX_NESTING + "1" + "]" * MAX_NESTING
+    assert nesting_depth(parse_json(ok, "ok.json")) == MAX_NESTING
+    assert nesting_depth(parse_yaml(ok, "ok.yaml")) == MAX_NESTING
+    over = "[" * (MAX_NESTING + 1) + "]" * (MAX_NESTING + 1)
+    with pytest.raises(InputError):
+        parse_json(over, "over.json")
+    with pytest.raises(InputError, match=r"bad.json, line 1, column 2: not valid JSON"):
+        parse_json("{x", "bad.json")

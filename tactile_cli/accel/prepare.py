@@ -35,10 +35,12 @@ from scipy import signal as _signal
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..spectral import limit_bandwidth
-from ..store.trials import TactileFile
-from ..store.writer import StoreWriter, current_command
 
 #: Streams and labels the accel-tree ingest writes (tactile_cli.ingest.accel_tree).
+from ..store.provenance import current_command
+from ..store.trials import TactileFile
+from ..store.writer import StoreWriter
+
 ACCEL_STREAM = "accel"
 VELOCITY_STREAM = "velocity"
 MOTION_LABEL = "motion"

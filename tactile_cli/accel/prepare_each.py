@@ -18,7 +18,7 @@ from typing import Any
 
 from ..batch import FileBatchResult, FileCounts, FileItem, plan_outputs, run_each
 from ..errors import InputError
-from ..store.writer import current_command
+from ..store.provenance import current_command
 
 
 def prepare_task(spec: dict[str, Any]) -> dict[str, Any]:

@@ -50,7 +50,7 @@ from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command
+from ..store.provenance import current_command
 from .config import TextureConfig, VibroSceneConfig
 from .kinematics import simulate_motion
 from .vibration import follow, hum, resonance, ring_downs, sensor, surface_curvature

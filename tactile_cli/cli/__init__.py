@@ -47,6 +47,8 @@ from . import synth as _synth
 from . import train as _train
 from . import validate as _validate
 from . import vibro_model as _vibro_model
+from ._errors import EXIT_INTERRUPTED
+from ._options import Abort, ClickException, NoArgsIsHelpError, finite_float_options, usage_error
 
 #: Columns of ``--help`` when stdout is not a terminal (a pipe, a file, a test) and neither
 #: ``COLUMNS`` nor ``TERMINAL_WIDTH`` is set: rich would use 80 and cut long paths and
@@ -83,11 +85,27 @@ def _help_rendered_wide() -> Iterator[None]:
 
 
 class _TactileGroup(TyperGroup):
-    """The ``tactile`` command group: help of every command at :func:`help_width`."""
+    """The ``tactile`` command group: help of every command at :func:`help_width`; a bad
+    command line (unknown option, bad value, missing argument) is one ``tactile: error:``
+    line and exit 2, like every other error (click's multi-line box is for help only)."""
 
     def main(self, *args: Any, **kwargs: Any) -> Any:
+        kwargs["standalone_mode"] = False
+        finite_float_options(self)
         with _help_rendered_wide():
-            return super().main(*args, **kwargs)
+            try:
+                rv = super().main(*args, **kwargs)
+            except NoArgsIsHelpError as exc:
+                rich_utils.rich_format_error(exc)  # `tactile` alone: the help, exit 2
+                sys.exit(exc.exit_code)
+            except ClickException as exc:
+                sys.exit(usage_error(exc))
+            except Abort:
+                print("tactile: error: aborted", file=sys.stderr)
+                sys.exit(EXIT_INTERRUPTED)
+        if isinstance(rv, int):  # click's Exit (--help, --version) returns its code
+            sys.exit(rv)
+        return rv
 
 
 app = typer.Typer(

@@ -8,6 +8,7 @@ gives :func:`run_guarded`. See :func:`to_flags` for the forms it rewrites.
 
 from __future__ import annotations
 
+import errno
 import re
 import signal
 import sys
@@ -17,13 +18,20 @@ from typing import NoReturn, TypeAlias, TypeVar
 
 from .. import interrupt
 from ..errors import TactileError
+from ..input_guard import input_scope
 from ..interrupt import Interrupted
-from ..store.writer import remove_live_temporaries
+from ..store.atomic import remove_live_temporaries
 
 T = TypeVar("T")
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
+
+#: errno values of the machine's resources (disk, memory, processes, files, permissions)
+#: that a command reports on one line instead of a traceback
+RESOURCE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM,
+                   errno.ENOMEM, errno.EAGAIN, errno.EMFILE, errno.ENFILE, errno.EFBIG,
+                   errno.EIO}
 
 
 #: How a command line spells a library argument: the flag (``"--overwrite"``), or the flag
@@ -155,7 +163,7 @@ def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = Non
     # CPython exit by SIGINT instead of with code 130
     previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     interrupt.clear()
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, input_scope():
         try:
             result = func()
         except TactileError as exc:
@@ -165,6 +173,19 @@ def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = Non
             remove_live_temporaries()
             fail("interrupted; no output was written and earlier outputs are intact",
                  EXIT_INTERRUPTED)
+        except MemoryError:
+            remove_live_temporaries()
+            fail("out of memory; nothing was written (give smaller inputs or options that "
+                 "ask for less: a shorter window, fewer channels, a coarser grid)")
+        except RecursionError:
+            remove_live_temporaries()
+            fail("an input is nested too deeply to read; nothing was written")
+        except OSError as exc:
+            if exc.errno not in RESOURCE_ERRNOS:
+                raise
+            remove_live_temporaries()
+            where = f"{exc.filename}: " if exc.filename else ""
+            fail(f"{where}{exc.strerror or exc}; nothing was written")
         finally:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .._version import __version__
-from ..store.writer import current_command, sha256_of
+from ..store.provenance import current_command, sha256_of
 
 
 def png_meta(inputs: Sequence[Path], config: dict[str, Any]) -> dict[str, str]:

@@ -77,7 +77,7 @@ def accumulate_command(
         from ..events.recording import accumulate_file, write_bins_csv, write_counts
         from ..interrupt import raise_if_requested
         from ..store.outdir import check_output_folder, output_folder
-        from ..store.writer import current_command
+        from ..store.provenance import current_command
 
         if smooth % 2 == 0:
             raise InputError(f"--smooth {smooth} must be odd (a centred moving average); "

@@ -38,9 +38,9 @@ def centroids_command(
 
     def body() -> None:
         from ..spatial.config import load_config
-        from ..spatial.provenance import provenance
         from ..spatial.stream import write_centroid_file
-        from ..store.writer import current_command
+        from ..store.provenance import current_command
+        from ..store.provenance import provenance_record as provenance
 
         if not file.exists():
             raise InputError("file not found", path=file)

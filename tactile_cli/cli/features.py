@@ -76,9 +76,8 @@ def spectral_command(
     array or several (--group), the stream's per-sample labels taken at each window's end."""
 
     def body() -> None:
-        from ..store.writer import current_command
+        from ..store.provenance import current_command, provenance_record
         from ..taxel import FeatureConfig, load_feature_config, write_feature_stream
-        from ..taxel.pipeline import provenance_record
 
         if (out is None) == (out_dir is None):
             raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
@@ -162,7 +161,7 @@ def spectral_command(
 
     def _any_stream(file: Path, out: Path) -> None:
         from ..spectral.stream_features import write_stream_features
-        from ..store.writer import current_command
+        from ..store.provenance import current_command
 
         settings = _settings()
         with RichProgress(enabled=progress) as bar:

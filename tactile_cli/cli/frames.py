@@ -47,10 +47,12 @@ def frames_command(
 
     def body() -> None:
         from ..spatial.config import load_config
-        from ..spatial.provenance import png_meta, provenance, write_json
         from ..spatial.render import KINDS, write_trial_frames
         from ..spatial.trial_events import event_trial_names, spatial_events
+        from ..store.atomic import write_json
         from ..store.outdir import check_output_folder, output_folder
+        from ..store.provenance import png_meta
+        from ..store.provenance import provenance_record as provenance
         from ..store.trials import TactileFile
 
         if not file.exists():

@@ -110,7 +110,7 @@ def grade_command(
 
 def _calibrate(cfg, config_path, areas, label_key, overlap, out):
     from .._version import __version__
-    from ..store.writer import current_command, sha256_of, utc_now
+    from ..store.provenance import current_command, sha256_of, utc_now
 
     pairs = [(a.area, true_grade_index(a, cfg, label_key)[0]) for a in areas]
     pairs = [(x, g) for x, g in pairs if g is not None and x == x]

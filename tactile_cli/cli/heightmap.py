@@ -59,7 +59,7 @@ def heightmap_command(
 
     def body() -> None:
         from ..store.outdir import check_output_folder, output_folder
-        from ..store.writer import current_command
+        from ..store.provenance import current_command
         from ..visuotactile.heightmap import heightmap_file
 
         if not file.exists():

@@ -43,8 +43,9 @@ def slip_interface_command(
     Contact estimation and the noise-floor gate apply first."""
 
     def body() -> None:
+        from ..store.atomic import atomic_file, write_text
+        from ..store.provenance import provenance_record
         from ..taxel import FeatureConfig, load_feature_config, slip_interface
-        from ..taxel.pipeline import provenance_record, write_atomic
 
         if not file.exists():
             raise InputError("file not found", path=file)
@@ -61,12 +62,12 @@ def slip_interface_command(
                                    cfg.model_dump(mode="json"))
         if out is not None:
             text = json.dumps({**summary, "provenance": record}, indent=2)
-            write_atomic(out, lambda p: Path(p).write_text(text + "\n"), overwrite=overwrite)
+            write_text(out, text + "\n", overwrite=overwrite)
         if plot is not None:
             from ..taxel.plots import plot_feature_spectra
 
-            write_atomic(plot, lambda p: plot_feature_spectra(result.features, p),
-                         overwrite=overwrite)
+            with atomic_file(plot, overwrite=overwrite, keep_suffix=True) as tmp:
+                plot_feature_spectra(result.features, tmp)
         if as_json:
             typer.echo(json.dumps(summary, indent=2))
             return

@@ -46,9 +46,11 @@ def slip_rate_command(
 
     def body() -> None:
         from ..spatial.config import load_config
-        from ..spatial.provenance import png_meta, provenance, write_json
         from ..spatial.slip_rate import estimate_slip_rates
+        from ..store.atomic import write_json
         from ..store.outdir import check_output_folder, output_folder
+        from ..store.provenance import png_meta
+        from ..store.provenance import provenance_record as provenance
 
         if not file.exists():
             raise InputError("file not found", path=file)

@@ -8,7 +8,6 @@ boundaries are dashed lines with their uncertainty as a band.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import matplotlib
@@ -17,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..store.atomic import save_figure  # noqa: E402
 from ..store.writer import safe_name  # noqa: E402
 from ..vocabulary import ACTIONS, action_index  # noqa: E402
 from .recording import TrialAccumulation  # noqa: E402
@@ -83,14 +83,7 @@ def plot_trial(acc: TrialAccumulation, out_dir: str | Path) -> Path:
     bottom.set_xlim(0, c.end_s)
     fig.tight_layout()
     out = out_dir / f"{safe_name(acc.trial)}.png"
-    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}.png")
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, out)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return out
+    return save_figure(fig, out, dpi=110, overwrite=True)
 
 
 __all__ = ["REGION_COLOURS", "plot_trial"]

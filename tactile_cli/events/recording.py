@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,6 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..progress import NullProgress, Progress
+from ..store.atomic import atomic_file, check_output_file
 from ..store.trials import Annotation, TactileFile, Trial
 from ..store.writer import StoreWriter
 from ..vocabulary import ACTIONS, BIN_S
@@ -305,24 +305,16 @@ def bin_rows(run: FileAccumulation) -> list[dict[str, Any]]:
 
 def write_bins_csv(run: FileAccumulation, out: str | Path, *, overwrite: bool = False) -> Path:
     """Write :func:`bin_rows` to a CSV file (temporary file, then an atomic rename)."""
-    out = Path(out)
-    if out.exists() and not overwrite:
-        raise InputError("output exists; pass `overwrite=True` to replace it", path=out)
-    if not out.parent.is_dir():
-        raise InputError("output folder does not exist", path=out.parent)
+    out = check_output_file(out, overwrite=overwrite)
     rows = bin_rows(run)
     fields = ["trial", "t_s", "positive", "negative", "net", "net_smoothed", "action"]
     if run.segmented:
         fields.append("action_detected")
-    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
-    try:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
-            writer.writeheader()
-            writer.writerows(rows)
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_file(out, overwrite=overwrite) as tmp, \
+            open(tmp, "w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
     return out
 
 

@@ -28,8 +28,8 @@ from typing import Any
 from ..batch import FileBatchResult, FileCounts, FileItem, run_each
 from ..config_file import missing_file_error
 from ..errors import InputError
+from ..store.provenance import current_command
 from ..store.trials import TactileFile
-from ..store.writer import current_command
 from .fit import FitOptions
 from .table import GROUP_NAMES
 

@@ -23,9 +23,11 @@ from __future__ import annotations
 import hashlib
 import importlib.metadata
 import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from ..errors import InputError
+from ..store.atomic import write_bytes
 
 if TYPE_CHECKING:
     from .solver import SolverSpec
@@ -114,12 +116,10 @@ def _exported(spec: SolverSpec, n_rows: int, n_points: int, folder: Path) -> Any
 
     with jax.enable_x64(True):
         exported = export.export(jax.jit(chunk_function(spec)))(*_arg_specs(n_rows, n_points))
-    try:  # atomic: write a temporary file beside it, then rename
+    try:  # a cache: a folder that cannot be written only costs the next run a compile
         folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".tmp-", delete=False) as f:
-            f.write(exported.serialize())
-        os.replace(f.name, path)
-    except OSError:
+        write_bytes(path, bytes(exported.serialize()), overwrite=True)
+    except (OSError, InputError):
         pass
     return exported
 

@@ -14,7 +14,6 @@ and validates; :func:`save_config` writes a config atomically with a header comm
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 from typing import Any, Literal
@@ -25,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
+from ..store.atomic import write_text
 from ..vocabulary import BIN_S
 from .fuzzy import MF_KINDS, MamdaniSystem, MembershipFunction
 
@@ -274,20 +274,15 @@ def _allowed(keys: list[Any], raw: dict[str, Any]) -> list[str]:
 
 
 def save_config(config: GraderConfig, path: str | Path, *, header: str = "") -> Path:
-    """Write ``config`` as YAML to ``path`` atomically (temporary file + ``os.replace``),
+    """Write ``config`` as YAML to ``path`` atomically (``store.atomic.write_text``),
     with ``header`` as leading comment lines."""
     path = Path(path)
     data = config.as_yaml_dict()
     body = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
     comment = "".join(f"# {line}\n" if line else "#\n" for line in header.splitlines())
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(comment + body, encoding="utf-8")
-        config_from_dict(yaml.safe_load(tmp.read_text(encoding="utf-8")), path=tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    text = comment + body
+    config_from_dict(yaml.safe_load(text), path=path)  # what is written reads back
+    return write_text(path, text, overwrite=True)
 
 
 __all__ = ["FeatureConfig", "GraderConfig", "OutputConfig", "RuleConfig", "TermConfig",

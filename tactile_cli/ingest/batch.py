@@ -27,7 +27,8 @@ from ..batch import (
     run_each,
 )
 from ..errors import InputError
-from ..store.writer import DEFAULT_COMPRESSION, Compression, current_command
+from ..store.provenance import current_command
+from ..store.writer import DEFAULT_COMPRESSION, Compression
 from . import IngestOptions, ingest
 
 #: One input of a batch and its output (see :class:`tactile_cli.batch.FileItem`).

@@ -49,8 +49,9 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.atomic import write_bytes, write_text
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .inputs import InputSpec, mismatch
 
@@ -59,24 +60,6 @@ COMPARE_CSV = "compare.csv"
 COMPARE_JSON = "compare.json"
 COMPARE_FORMAT = "tactile-compare"
 COMPARE_FORMAT_VERSION = 1
-
-
-# -- atomic files ----------------------------------------------------------------------------
-def write_atomic(path: str | Path, data: bytes | str) -> Path:
-    """Write ``data`` to ``path`` through a temporary sibling and ``os.replace``: the file
-    is either the old one or complete, never half-written."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        if isinstance(data, str):
-            tmp.write_text(data, encoding="utf-8")
-        else:
-            tmp.write_bytes(data)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
 
 
 # -- pure selection --------------------------------------------------------------------------
@@ -718,10 +701,10 @@ def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | Non
         w.writerow({k: "" if v is None else v for k, v in row.items()})
     # built beside ``out_dir`` and moved in only when all three are written
     with output_folder(out, merge=True) as tmp:
-        write_atomic(tmp / COMPARE_PNG, plot_comparison(cmp))
-        write_atomic(tmp / COMPARE_CSV, buf.getvalue())
-        write_atomic(tmp / COMPARE_JSON, runs.dumps(comparison_record(cmp, command=command))
-                     + "\n")
+        write_bytes(tmp / COMPARE_PNG, plot_comparison(cmp))
+        write_text(tmp / COMPARE_CSV, buf.getvalue())
+        write_text(tmp / COMPARE_JSON, runs.dumps(comparison_record(cmp, command=command))
+                   + "\n")
     return ComparisonFiles(out / COMPARE_PNG, out / COMPARE_CSV, out / COMPARE_JSON)
 
 
@@ -729,4 +712,4 @@ __all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "Comparis
            "RunPoint", "check_run_folder", "choose_data_name", "compare", "compare_points",
            "comparison_record", "distinct_run_paths", "eval_names", "pareto_front",
            "pick_fastest", "pick_needed", "plot_comparison", "read_point", "run_labels",
-           "table_rows", "within_margin", "write_atomic", "write_comparison"]
+           "table_rows", "within_margin", "write_comparison"]

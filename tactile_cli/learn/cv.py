@@ -47,9 +47,10 @@ import torch
 
 from .._version import __version__
 from ..errors import InputError
+from ..store.atomic import swap_into_place, write_text
 from ..store.origin import data_origin
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .config import TrainConfig, parse_config
 from .data import (
@@ -189,7 +190,7 @@ def train_cv(
     if on_plan is not None:
         on_plan(plan, finished)
     partial.mkdir(parents=True, exist_ok=True)
-    runs.write_json(partial / PLAN_JSON, record)
+    runs.write_json(partial / PLAN_JSON, record, overwrite=True)
     (partial / FOLDS_DIR).mkdir(exist_ok=True)
     command = command if command is not None else current_command()
     todo = [f for f in plan.folds if f.index not in finished]
@@ -235,11 +236,11 @@ def train_cv(
                             "n_windows": info["split"].get("windows"), "resumed": True}
     info = _parent_info(config, paths, plan, record, summaries, partial, command, config_path)
     info["wall_time_s"] = time.perf_counter() - started
-    runs.write_json(partial / runs.RUN_JSON, info)
-    (partial / runs.CONFIG_YAML).write_text(config.as_yaml(), encoding="utf-8")
+    runs.write_json(partial / runs.RUN_JSON, info, overwrite=True)
+    write_text(partial / runs.CONFIG_YAML, config.as_yaml(), overwrite=True)
     with output_folder(out, overwrite=overwrite) as tmp:
         for entry in partial.iterdir():
-            os.replace(entry, tmp / entry.name)
+            swap_into_place(entry, tmp / entry.name)
     shutil.rmtree(partial, ignore_errors=True)
     return CvTrainResult(out, config.model.family, plan.k, len(plan.folds), plan.mode, plan.by,
                          sorted(finished), [f.index for f in todo], jobs,

@@ -27,7 +27,7 @@ from typing import Any, Literal
 
 from ..errors import InputError
 from ..store.origin import data_origin
-from ..store.writer import current_command, utc_now
+from ..store.provenance import current_command, utc_now
 from . import runs
 from .cv import evaluate_cv
 from .data import check_heads_match, data_files, make_windows, read_trials

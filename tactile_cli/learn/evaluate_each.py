@@ -22,7 +22,7 @@ from typing import Any, Literal
 from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
 from ..config_file import missing_file_error
 from ..errors import InputError
-from ..store.writer import current_command
+from ..store.provenance import current_command
 from . import runs
 
 #: Why the batch has no latency figures (in each item's notes and the command's output).

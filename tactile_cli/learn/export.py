@@ -29,7 +29,6 @@ import contextlib
 import io
 import json
 import logging
-import os
 import time
 import warnings
 from collections.abc import Iterator, Sequence
@@ -43,8 +42,8 @@ from torch import Tensor, nn
 
 from .._version import __version__
 from ..errors import InputError
-from ..store.outdir import check_output_file
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.atomic import atomic_file, check_output_file
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .data import Normalisation, TrialSeries, WindowSet, make_windows
 from .heads import HeadSpec
@@ -297,10 +296,6 @@ def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) ->
     }
 
 
-def _tmp(path: Path) -> Path:
-    return path.with_name(f".{path.name}.tmp-{os.getpid()}")
-
-
 def export_run(run_dir: str | Path, out: str | Path, *,
                format: Literal["onnx", "torchscript"] = "onnx", overwrite: bool = False,
                command: str | None = None) -> ExportResult:
@@ -324,8 +319,9 @@ def export_run(run_dir: str | Path, out: str | Path, *,
         (2, d.window, len(d.channels))).astype(np.float32))
     record = sidecar_record(run, format, out.name,
                             command=command if command is not None else current_command())
-    tmp_model, tmp_side = _tmp(out), _tmp(side)
-    try:
+    # the sidecar's block is the outer one: the model lands first, then its description
+    with atomic_file(side, overwrite=overwrite) as tmp_side, \
+            atomic_file(out, overwrite=overwrite) as tmp_model:
         try:
             if format == "onnx":
                 _write_onnx(model, example, tmp_model, record)
@@ -338,11 +334,6 @@ def export_run(run_dir: str | Path, out: str | Path, *,
                              f"({_first_line(exc)})", path=run.path) from None
         record["model"]["sha256"] = sha256_of(tmp_model)
         tmp_side.write_text(runs.dumps(record) + "\n", encoding="utf-8")
-        os.replace(tmp_model, out)
-        os.replace(tmp_side, side)
-    finally:
-        tmp_model.unlink(missing_ok=True)
-        tmp_side.unlink(missing_ok=True)
     return ExportResult(out, side, format, family, output_names(run.heads),
                         out.stat().st_size, record)
 

@@ -19,8 +19,8 @@ import numpy as np
 from .._version import __version__
 from ..errors import InputError
 from ..store.outdir import check_output_folder
+from ..store.provenance import sha256_of
 from ..store.reader import recording_hashes
-from ..store.writer import sha256_of
 from . import runs
 from .data import WindowSet
 from .figures import plot_confusion

@@ -60,7 +60,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import InputError
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 
 PERTURB_DIR = "perturb"
@@ -701,7 +701,7 @@ def write_perturbation_set(results: Sequence[PerturbResult], out_dir: str | Path
     """The comparison of several runs in ``out_dir``: perturb.png (one line per run),
     perturb.csv and perturb.json (every result and the provenance), moved in together
     from a hidden folder beside it (other files in ``out_dir`` are kept)."""
-    from .compare import write_atomic
+    from ..store.atomic import write_bytes, write_text
 
     out = check_output_folder(out_dir, merge=True)
     record = {
@@ -715,9 +715,9 @@ def write_perturbation_set(results: Sequence[PerturbResult], out_dir: str | Path
     }
     # built beside ``out_dir`` and moved in only when all three are written
     with output_folder(out, merge=True) as tmp:
-        write_atomic(tmp / PERTURB_PNG, plot_perturbations(results))
-        write_atomic(tmp / PERTURB_CSV, _csv_text(perturbation_rows(results)))
-        write_atomic(tmp / PERTURB_JSON, runs.dumps(record) + "\n")
+        write_bytes(tmp / PERTURB_PNG, plot_perturbations(results))
+        write_text(tmp / PERTURB_CSV, _csv_text(perturbation_rows(results)))
+        write_text(tmp / PERTURB_JSON, runs.dumps(record) + "\n")
     return {"png": out / PERTURB_PNG, "csv": out / PERTURB_CSV, "json": out / PERTURB_JSON}
 
 

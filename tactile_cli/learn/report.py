@@ -50,9 +50,10 @@ from typing import Any
 
 from .._version import __version__
 from ..errors import InputError, TactileError
+from ..store.atomic import write_text
 from ..store.origin import UNKNOWN, data_origin, describe_origin, unknown_origin
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .compare import (
     check_run_folder,
@@ -61,7 +62,6 @@ from .compare import (
     plot_comparison,
     run_labels,
     table_rows,
-    write_atomic,
 )
 from .gallery import Gallery, group_figures
 from .perturb import find_perturbations, level_text, load_perturbation, plot_perturbations
@@ -933,8 +933,8 @@ def build_report(
     }
     prov = out / REPORT_JSON
     with output_folder(out, merge=True) as tmp:  # both files moved in together
-        write_atomic(tmp / INDEX_HTML, page)
-        write_atomic(tmp / REPORT_JSON, runs.dumps(record) + "\n")
+        write_text(tmp / INDEX_HTML, page)
+        write_text(tmp / REPORT_JSON, runs.dumps(record) + "\n")
     return ReportResult(index, prov, [str(d) for d in dirs], compared, perturbed,
                         [str(p) for p in datas], fig_names, notes,
                         [r.record() for r in results])

@@ -38,6 +38,8 @@ import torch
 from .._version import __version__
 from ..config_file import missing_file_error, parse_yaml, read_text
 from ..errors import InputError
+from ..input_guard import note_input
+from ..store.atomic import write_text
 from ..store.outdir import output_folder
 from .config import TrainConfig, parse_config
 from .data import Normalisation
@@ -92,8 +94,9 @@ def dumps(obj: Any) -> str:
     return json.dumps(json_safe(obj), indent=2, allow_nan=False)
 
 
-def write_json(path: Path, obj: Any) -> None:
-    path.write_text(dumps(obj) + "\n", encoding="utf-8")
+def write_json(path: Path, obj: Any, *, overwrite: bool = False) -> None:
+    """``obj`` as :func:`dumps` JSON in file ``path``, written atomically."""
+    write_text(path, dumps(obj) + "\n", overwrite=overwrite)
 
 
 @dataclass
@@ -294,6 +297,9 @@ def _run_folder(path: str | Path) -> Path:
     if not info_path.exists() and not info_path.is_symlink():
         raise InputError("not a run folder (no run.json); train one with `tactile train`",
                          path=path)
+    for entry in path.iterdir():  # the run's own files are inputs: no output may replace them
+        if entry.is_file():
+            note_input(entry, tree=False)
     return path
 
 

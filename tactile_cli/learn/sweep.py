@@ -63,11 +63,12 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from .._version import __version__
 from ..config_file import load_yaml_model, read_yaml
 from ..errors import InputError
+from ..store.atomic import write_bytes, write_text
 from ..store.outdir import check_output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from ..vocabulary import CHANNEL_SETS
 from . import runs
-from .compare import meets_targets, pareto_front, pick_needed, within_margin, write_atomic
+from .compare import meets_targets, pareto_front, pick_needed, within_margin
 from .config import parse_config
 from .data import data_files
 
@@ -514,7 +515,7 @@ def run_sweep(
         "runs": [r.as_dict() for r in planned],
     }
     (out / RUNS_DIR).mkdir(parents=True, exist_ok=True)
-    write_atomic(out / SWEEP_JSON, runs.dumps(plan) + "\n")
+    write_text(out / SWEEP_JSON, runs.dumps(plan) + "\n", overwrite=True)
     if on_plan is not None:
         on_plan(planned)
     n_skipped = sum(r.status == "finished" for r in planned)
@@ -818,21 +819,23 @@ def collect(config: SweepConfig, planned: list[PlannedRun], out: Path, *,
         n_failed=sum(r["status"] == "failed" for r in rows),
         n_na=sum(r["status"] == "n/a" for r in rows),
         n_skipped=sum(r.status == "finished" for r in planned), notes=notes)
-    write_atomic(out / TABLE_CSV, _csv(rows))
-    write_atomic(out / TABLE_MD, f"# Sweep {config.name}\n\n" + table_markdown(rows, heads)
-                 + ("" if pick is None else f"\npick: **{pick['run']}** ({pick['why']})\n"))
-    write_atomic(out / FIG_WINDOWS, plot_windows(
-        rows, heads, title=f"sweep {config.name}: accuracy and MAE against window size"))
-    write_atomic(out / FIG_SPEED, plot_speed_accuracy(
+    write_text(out / TABLE_CSV, _csv(rows), overwrite=True)
+    write_text(out / TABLE_MD, f"# Sweep {config.name}\n\n" + table_markdown(rows, heads)
+               + ("" if pick is None else f"\npick: **{pick['run']}** ({pick['why']})\n"),
+               overwrite=True)
+    write_bytes(out / FIG_WINDOWS, plot_windows(
+        rows, heads, title=f"sweep {config.name}: accuracy and MAE against window size"),
+        overwrite=True)
+    write_bytes(out / FIG_SPEED, plot_speed_accuracy(
         rows, score_head, pareto, pick,
-        title=f"sweep {config.name}: {score_head} accuracy against latency"))
+        title=f"sweep {config.name}: {score_head} accuracy against latency"), overwrite=True)
     record = {
         "format": SWEEP_RESULTS_FORMAT, "format_version": SWEEP_FORMAT_VERSION,
         "created_utc": utc_now(), "command": command, "tool_version": __version__,
         "sweep_file": plan["sweep_file"], "train_data": plan["train_data"],
         "eval_data": plan["eval_data"], "eval_name": eval_name, **result.as_dict(),
     }
-    write_atomic(out / RESULTS_JSON, runs.dumps(record) + "\n")
+    write_text(out / RESULTS_JSON, runs.dumps(record) + "\n", overwrite=True)
     return result
 
 

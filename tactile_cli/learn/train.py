@@ -30,7 +30,7 @@ from .._version import __version__
 from ..errors import InputError
 from ..interrupt import raise_if_requested
 from ..store.outdir import check_output_folder
-from ..store.writer import current_command, sha256_of, utc_now
+from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .config import TrainConfig
 from .data import (

@@ -42,7 +42,7 @@ from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.origin import DATASET_LABEL, ORIGIN_LABEL
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command
+from ..store.provenance import current_command
 from .config import SceneConfig
 from .events import EVENT_DTYPE, trial_events
 from .layout import SceneLayout, scene_layout

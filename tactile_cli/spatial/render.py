@@ -1,14 +1,13 @@
 """Pictures of the spatial chain: event frames as PNGs, a contact sheet with the ROIs drawn
 (paper 000, Fig. 13) and the centroid / velocity / displacement curves of a slip (Fig. 23).
 
-Every file is written to a temporary name beside its target and renamed into place, so an
+Every file goes through the store's atomic writer (a temporary name, then a rename), so an
 interrupted run never leaves a truncated PNG; each PNG carries the command and tool version
 in its text chunks.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -21,6 +20,7 @@ from matplotlib.patches import Rectangle  # noqa: E402
 from PIL import Image, PngImagePlugin  # noqa: E402
 
 from ..interrupt import raise_if_requested  # noqa: E402
+from ..store.atomic import atomic_file, save_figure  # noqa: E402
 from ..store.trials import Trial  # noqa: E402
 from .roi import Roi  # noqa: E402
 from .slip_rate import SlipRateEstimate  # noqa: E402
@@ -73,24 +73,9 @@ def write_png(path: str | Path, rgb: np.ndarray, *,
               meta: Mapping[str, str] | None = None) -> Path:
     """Write (H, W, 3) uint8 ``rgb`` atomically (temporary file + rename)."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with atomic_file(path, overwrite=True) as tmp:
         Image.fromarray(rgb, mode="RGB").save(tmp, format="PNG", compress_level=3,
                                               pnginfo=_png_info(meta or {}))
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
-
-
-def _save_figure(fig, path: Path, meta: Mapping[str, str] | None, dpi: int = 100) -> Path:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        fig.savefig(tmp, format="png", dpi=dpi, metadata=dict(meta or {}))
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
     return path
 
 
@@ -125,7 +110,7 @@ def contact_sheet(
     if title:
         fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    return _save_figure(fig, Path(path), meta, dpi=110)
+    return save_figure(fig, path, meta=meta, dpi=110, overwrite=True)
 
 
 def plot_slip(estimate: SlipRateEstimate, path: str | Path, *,
@@ -167,7 +152,7 @@ def plot_slip(estimate: SlipRateEstimate, path: str | Path, *,
                  f"{r.displacement_m * 1e3:.3f} +- {r.displacement_se_m * 1e3:.3f} mm",
                  fontsize=9)
     fig.tight_layout()
-    return _save_figure(fig, Path(path), meta)
+    return save_figure(fig, path, meta=meta, overwrite=True)
 
 
 def write_trial_frames(

@@ -255,7 +255,7 @@ def stream_features_each(
     Refused before any work: a missing input, two inputs of one stem, an output that is a
     folder."""
     from ..batch import plan_outputs, run_each
-    from ..store.writer import current_command
+    from ..store.provenance import current_command
 
     items = plan_outputs(inputs, out_dir, overwrite=overwrite)
     out = Path(out_dir)

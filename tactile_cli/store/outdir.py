@@ -28,15 +28,21 @@ Two ways of putting the result in place:
 
 from __future__ import annotations
 
-import os
-import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import InputError
+from ..input_guard import refuse_overlap
 from ..interrupt import raise_if_requested
-from .writer import _LIVE_TEMPORARIES, process_alive
+from .atomic import (
+    LIVE_TEMPORARIES,
+    check_writable,
+    remove,
+    remove_stale_temporaries,
+    swap_into_place,
+    temporary_path,
+)
 
 
 def _file_ancestor(path: Path) -> Path | None:
@@ -50,8 +56,9 @@ def _file_ancestor(path: Path) -> Path | None:
 def check_output_folder(out: str | Path, *, overwrite: bool = False,
                         merge: bool = False) -> Path:
     """Refuse, with one :class:`InputError`, an output folder that cannot be written:
-    ``out`` is a file, a parent of it is a file, or (unless ``overwrite`` or ``merge``)
-    ``out`` is a folder that is not empty. Returns ``out`` as a Path."""
+    ``out`` is a file, a parent of it is a file, (unless ``overwrite`` or ``merge``) ``out``
+    is a folder that is not empty, it overlaps an input of the current command (see
+    :mod:`.input_guard`), or its folder cannot be written. Returns ``out`` as a Path."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError("is a file; give a folder for the output", path=out)
@@ -59,47 +66,17 @@ def check_output_folder(out: str | Path, *, overwrite: bool = False,
     if blocker is not None:
         raise InputError(f"is a file, so the output folder {out} cannot be made inside it; "
                          "give another folder", path=blocker)
+    refuse_overlap(out)
     if not (overwrite or merge) and out.is_dir() and any(out.iterdir()):
         raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
                          "replace it", path=out)
-    return out
-
-
-def check_output_file(out: str | Path, *, overwrite: bool = False) -> Path:
-    """Refuse, with one :class:`InputError`, an output file that cannot be written: ``out``
-    is a folder, exists (unless ``overwrite``), or its parent folder is missing or a file.
-    Returns ``out`` as a Path."""
-    out = Path(out)
-    if out.is_dir():
-        raise InputError("is a folder; give a file name for the output", path=out)
-    if out.exists() and not overwrite:
-        raise InputError("output exists; pass `overwrite=True` to replace it", path=out)
-    if out.parent.exists() and not out.parent.is_dir():
-        raise InputError("is a file, not a folder; give an output path in a folder",
-                         path=out.parent)
-    if not out.parent.exists():
-        raise InputError("output folder does not exist", path=out.parent)
+    check_writable(out)
     return out
 
 
 def temporary_name(out: Path) -> Path:
     """The hidden temporary folder of ``out`` for this process."""
-    return out.with_name(f".{out.name}.tmp-{os.getpid()}")
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
-
-
-def _remove_stale(out: Path) -> None:
-    """Delete temporary siblings of ``out`` left by killed runs (their pid is gone)."""
-    for tmp in out.parent.glob(f".{out.name}.*-*"):
-        kind, _, pid = tmp.name.rpartition("-")
-        if pid.isdigit() and kind.endswith((".tmp", ".old")) and not process_alive(int(pid)):
-            _remove(tmp)
+    return temporary_path(out)
 
 
 def _make_parents(folder: Path) -> list[Path]:
@@ -114,32 +91,15 @@ def _make_parents(folder: Path) -> list[Path]:
     return missing
 
 
-def _swap(new: Path, dest: Path) -> None:
-    """Rename ``new`` to ``dest``; an existing ``dest`` is renamed aside first (and put back
-    if the second rename fails), then deleted."""
-    if not (dest.exists() or dest.is_symlink()):
-        os.replace(new, dest)
-        return
-    old = dest.with_name(f".{dest.name}.old-{os.getpid()}")
-    _remove(old)
-    os.replace(dest, old)
-    try:
-        os.replace(new, dest)
-    except BaseException:
-        os.replace(old, dest)
-        raise
-    _remove(old)
-
-
 def _move_into_place(tmp: Path, out: Path, *, overwrite: bool, merge: bool) -> None:
     if not out.exists() or (out.is_dir() and not any(out.iterdir())):
-        os.replace(tmp, out)  # rename() replaces an empty folder
+        swap_into_place(tmp, out)
     elif merge:
         for entry in sorted(tmp.iterdir()):
-            _swap(entry, out / entry.name)
+            swap_into_place(entry, out / entry.name)
         tmp.rmdir()
     elif overwrite:
-        _swap(tmp, out)
+        swap_into_place(tmp, out)
     else:  # appeared while we worked
         raise InputError("output folder exists and is not empty; pass `overwrite=True` to "
                          "replace it", path=out)
@@ -155,10 +115,10 @@ def output_folder(out: str | Path, *, overwrite: bool = False,
     out = check_output_folder(out, overwrite=overwrite, merge=merge)
     created = _make_parents(out.parent)
     tmp = temporary_name(out)
-    _LIVE_TEMPORARIES.add(tmp)  # registered before it exists: no unguarded window
+    LIVE_TEMPORARIES.add(tmp)  # registered before it exists: no unguarded window
     try:
-        _remove_stale(out)
-        _remove(tmp)
+        remove_stale_temporaries(out)
+        remove(tmp)
         try:
             tmp.mkdir()
         except OSError as exc:
@@ -169,7 +129,7 @@ def output_folder(out: str | Path, *, overwrite: bool = False,
         check_output_folder(out, overwrite=overwrite, merge=merge)  # changed while we worked?
         _move_into_place(tmp, out, overwrite=overwrite, merge=merge)
     except BaseException:
-        _remove(tmp)
+        remove(tmp)
         for folder in reversed(created):
             try:
                 folder.rmdir()
@@ -177,4 +137,4 @@ def output_folder(out: str | Path, *, overwrite: bool = False,
                 break
         raise
     finally:
-        _LIVE_TEMPORARIES.discard(tmp)
+        LIVE_TEMPORARIES.discard(tmp)

@@ -37,6 +37,7 @@ import h5py
 import numpy as np
 
 from ..errors import InputError
+from ..input_guard import note_input
 from .spec import load_spec
 from .validate import check_readable
 
@@ -779,6 +780,7 @@ class TactileFile:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
+        note_input(self.path, tree=False)
         self.schema_version, self._h5 = open_checked(self.path)
         self._sensors: dict[str, Sensor] = {}
         for group in ("sensors", "trials"):  # an empty list of trials must not pass for one

@@ -33,17 +33,11 @@ import numpy as np
 from .._version import __version__
 from ..errors import InputError
 from ..interrupt import raise_if_requested
+from .atomic import LIVE_TEMPORARIES, check_writable, remove_stale_temporaries, temporary_path
+from .provenance import current_command, utc_now
 from .spec import load_spec
 from .validate import check_readable
-from .writer import (
-    _LIVE_TEMPORARIES,
-    _STR,
-    _remove_stale_temporaries,
-    current_command,
-    safe_name,
-    utc_now,
-    validate_and_swap,
-)
+from .writer import _STR, safe_name, validate_and_swap
 
 #: Bytes per block when copying the file (the copy checks for an interrupt between blocks).
 COPY_BLOCK = 1 << 24
@@ -161,11 +155,12 @@ class DerivedUpdate:
             self.attrs["config_json"] = json.dumps(config, sort_keys=True, default=str)
         if inputs is not None:
             self.attrs["inputs_json"] = json.dumps(inputs, sort_keys=True, default=str)
-        self.tmp = self.path.with_name(f".{self.path.name}.tmp-{os.getpid()}")
+        check_writable(self.path)
+        self.tmp = temporary_path(self.path)
         self._groups: dict[tuple[str, str], h5py.Group] = {}
         self._committed = False
-        _remove_stale_temporaries(self.path)
-        _LIVE_TEMPORARIES.add(self.tmp)  # registered before it exists: no unguarded window
+        remove_stale_temporaries(self.path)
+        LIVE_TEMPORARIES.add(self.tmp)  # registered before it exists: no unguarded window
         self._h5: h5py.File | None = None
         try:
             self._copy()
@@ -211,7 +206,7 @@ class DerivedUpdate:
             finally:
                 self._h5 = None
         self.tmp.unlink(missing_ok=True)
-        _LIVE_TEMPORARIES.discard(self.tmp)
+        LIVE_TEMPORARIES.discard(self.tmp)
 
     def commit(self) -> Path:
         """Close and validate the copy, then rename it over the original; returns the path."""
@@ -222,7 +217,7 @@ class DerivedUpdate:
         self._h5 = None
         validate_and_swap(self.tmp, self.path,
                           breaks=f"{self.path}: the updated file would break the schema",
-                          outcome="the file was left unchanged")
+                          outcome="the file was left unchanged", in_place=True)
         self._committed = True
         return self.path
 

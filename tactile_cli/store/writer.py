@@ -12,14 +12,9 @@ open the files.
 
 from __future__ import annotations
 
-import datetime as _dt
-import hashlib
 import json
 import os
 import re
-import shlex
-import shutil
-import sys
 import threading
 import zlib
 from collections import deque
@@ -35,6 +30,15 @@ import numpy as np
 from .._version import __version__
 from ..errors import InputError, SchemaError
 from ..interrupt import raise_if_requested
+from .atomic import (
+    LIVE_TEMPORARIES,
+    check_output_file,
+    remove_stale_temporaries,
+    swap_into_place,
+    temporary_path,
+    write_error,
+)
+from .provenance import current_command, sha256_of, utc_now
 from .spec import load_spec
 from .trials import attr_value
 from .validate import validate_file
@@ -47,22 +51,6 @@ EVENT_CHUNK = 1 << 16
 SIGNAL_CHUNK_BYTES = 1 << 18
 
 _STR = h5py.string_dtype("utf-8")
-#: Temporary files of writers in this process that are neither committed nor aborted yet.
-#: A signal can arrive between a writer's constructor and its ``with`` block, where no
-#: cleanup code runs; the CLI removes whatever is left here when it is interrupted.
-_LIVE_TEMPORARIES: set[Path] = set()
-
-
-def remove_live_temporaries() -> None:
-    """Delete the temporary files (and folders, see :mod:`.outdir`) of every unfinished
-    writer of this process."""
-    for tmp in list(_LIVE_TEMPORARIES):
-        if tmp.is_dir() and not tmp.is_symlink():
-            shutil.rmtree(tmp, ignore_errors=True)
-        else:
-            tmp.unlink(missing_ok=True)
-        _LIVE_TEMPORARIES.discard(tmp)
-
 
 _NAME_OK = re.compile(r"[^A-Za-z0-9_.\-]+")
 
@@ -71,55 +59,6 @@ def safe_name(name: str) -> str:
     """An HDF5 link name from free text: letters, digits, ``_ . -`` only."""
     cleaned = _NAME_OK.sub("_", name).strip("_")
     return cleaned or "unnamed"
-
-
-def utc_now() -> str:
-    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-
-
-def current_command() -> str:
-    """The command line of this process, shell-quoted (recorded as provenance)."""
-    argv = list(sys.argv)
-    if argv and argv[0].endswith(("tactile", "__main__.py")):
-        argv[0] = "tactile"
-    return " ".join(shlex.quote(a) for a in argv)
-
-
-def process_alive(pid: int) -> bool:
-    """Whether process ``pid`` is running. A killed process its parent has not yet reaped (a
-    zombie, Linux ``/proc/<pid>/stat`` state Z) is dead: it writes nothing any more."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # alive, owned by someone else
-        return True
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:  # no /proc (not Linux), or it just went
-        return True
-    return stat.rpartition(")")[2].split()[:1] != ["Z"]
-
-
-def _remove_stale_temporaries(out: Path) -> None:
-    """Delete temporary files of ``out`` left by writers that were killed (SIGKILL, power loss).
-
-    A temporary file is named ``.<out name>.tmp-<pid>``; it is stale when no process with
-    that pid is alive. Files of live writers are left alone.
-    """
-    for tmp in out.parent.glob(f".{out.name}.tmp-*"):
-        pid = tmp.name.rsplit("-", 1)[1]
-        if pid.isdigit() and not process_alive(int(pid)):
-            tmp.unlink(missing_ok=True)
-
-
-def sha256_of(path: str | Path, *, block: int = 1 << 22) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        while chunk := f.read(block):
-            raise_if_requested()
-            h.update(chunk)
-    return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -139,11 +78,13 @@ DEFAULT_COMPRESSION = Compression()
 
 
 def validate_and_swap(tmp: Path, dest: Path, *, verified: Collection[str] = (), breaks: str,
-                      outcome: str) -> None:
+                      outcome: str, in_place: bool = False) -> None:
     """Validate the finished temporary file ``tmp``, flush it to disk and rename it over
     ``dest`` in one ``os.replace``; on any error or interrupt delete ``tmp`` (``dest`` is
     untouched) and re-raise. A schema violation is a :class:`SchemaError` "``breaks`` (the
-    first violations); ``outcome``". ``verified`` is passed to :func:`validate_file`."""
+    first violations); ``outcome``". ``verified`` is passed to :func:`validate_file`.
+    ``in_place``: ``dest`` is the input being updated (:class:`~.update.DerivedUpdate`),
+    so the input guard does not refuse it."""
     try:
         report = validate_file(tmp, verified=verified)
         if not report.ok:
@@ -153,13 +94,19 @@ def validate_and_swap(tmp: Path, dest: Path, *, verified: Collection[str] = (), 
                               f"{outcome}")
         with open(tmp, "rb") as f:  # the data reach the disk before the rename
             os.fsync(f.fileno())
-        raise_if_requested()
-        os.replace(tmp, dest)
+        if in_place:
+            raise_if_requested()
+            try:
+                os.replace(tmp, dest)
+            except OSError as exc:
+                raise write_error(exc, dest) from None
+        else:
+            swap_into_place(tmp, dest)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     finally:
-        _LIVE_TEMPORARIES.discard(tmp)
+        LIVE_TEMPORARIES.discard(tmp)
 
 
 class StoreWriter:
@@ -190,15 +137,9 @@ class StoreWriter:
         self.out = Path(out)
         if self.out.is_dir():  # before the `overwrite=True` hint, which would not help
             raise InputError("output is a folder; give a file name ending in .h5", path=self.out)
-        if self.out.exists() and not overwrite:
-            raise InputError("output exists; pass `overwrite=True` to replace it", path=self.out)
-        if self.out.parent.exists() and not self.out.parent.is_dir():
-            raise InputError("is a file, not a folder; give an output path in a folder",
-                             path=self.out.parent)
-        if not self.out.parent.exists():
-            raise InputError("output folder does not exist", path=self.out.parent)
-        self.tmp = self.out.with_name(f".{self.out.name}.tmp-{os.getpid()}")
-        _remove_stale_temporaries(self.out)
+        check_output_file(self.out, overwrite=overwrite)
+        self.tmp = temporary_path(self.out)
+        remove_stale_temporaries(self.out)
         self.compression = compression
         #: datasets whose content the write path already checked with the schema's rules
         self.verified: set[str] = set()
@@ -206,7 +147,7 @@ class StoreWriter:
         self._source_index: dict[str, int] = {}
         self._committed = False
         spec = load_spec()
-        _LIVE_TEMPORARIES.add(self.tmp)  # registered before it exists: no unguarded window
+        LIVE_TEMPORARIES.add(self.tmp)  # registered before it exists: no unguarded window
         self._h5: h5py.File | None = h5py.File(self.tmp, "w", libver="latest")
         try:
             self._write_header(spec, command, config)
@@ -251,7 +192,7 @@ class StoreWriter:
             finally:
                 self._h5 = None
         self.tmp.unlink(missing_ok=True)
-        _LIVE_TEMPORARIES.discard(self.tmp)
+        LIVE_TEMPORARIES.discard(self.tmp)
 
     def commit(self) -> Path:
         """Close, validate and atomically move the file into place; returns its path."""

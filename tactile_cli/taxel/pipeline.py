@@ -489,38 +489,3 @@ def write_feature_stream(path: str | Path, out: str | Path, fcfg: FeatureConfig,
         written = w.commit()
     return FeatureStreamResult(written, len(trials), n_windows, channels, fcfg.window_s,
                                fcfg.hop_s, flags)
-
-
-# -- provenance and atomic outputs ------------------------------------------------------------
-def provenance_record(inputs: list[str | Path], config: dict[str, Any]) -> dict[str, Any]:
-    """``command``, ``tool_version``, ``created_utc``, ``config`` and each input's path,
-    size and SHA-256."""
-    from .._version import __version__
-    from ..store.writer import current_command, sha256_of, utc_now
-
-    return {"command": current_command(), "tool_name": "tactile-cli",
-            "tool_version": __version__, "created_utc": utc_now(), "config": config,
-            "inputs": [{"path": str(p), "size_bytes": Path(p).stat().st_size,
-                        "sha256": sha256_of(p)} for p in inputs]}
-
-
-def write_atomic(path: str | Path, write: Any, *, overwrite: bool = False) -> Path:
-    """Call ``write(tmp_path)`` and rename the temporary file to ``path`` (nothing is left
-    behind on failure). Raises :class:`InputError` when ``path`` exists and ``overwrite``
-    is false, or is a folder."""
-    import os
-
-    path = Path(path)
-    if path.is_dir():
-        raise InputError("is a folder; give a file name", path=path)
-    if path.exists() and not overwrite:
-        raise InputError("output exists; pass `overwrite=True` to replace it", path=path)
-    if not path.parent.is_dir():
-        raise InputError("output folder does not exist", path=path.parent)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}{path.suffix}")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path

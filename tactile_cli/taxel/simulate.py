@@ -44,7 +44,8 @@ import numpy as np
 from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
-from ..store.writer import StoreWriter, current_command
+from ..store.provenance import current_command
+from ..store.writer import StoreWriter
 from .config import SLIP_TYPES, PresetConfig, SceneConfig
 
 #: Trial label values; the annotations of every trial.

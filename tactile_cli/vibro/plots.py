@@ -4,28 +4,19 @@ tool version, inputs) in their metadata."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from ..store.atomic import save_figure
 from .model import ModelSpectra
 from .pipeline import DetectionReport, TrialDetection
 
 
 def _save(fig, path: str | Path, meta: Mapping[str, str] | None) -> Path:
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        fig.savefig(tmp, format="png", dpi=110, metadata=dict(meta or {}))
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return path
+    return save_figure(fig, Path(path).with_suffix(Path(path).suffix or ".png"), meta=meta,
+                       dpi=110, overwrite=True)
 
 
 def plot_model_spectra(spectra: ModelSpectra, path: str | Path, *,

@@ -43,7 +43,8 @@ import numpy as np
 from ..errors import check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
-from ..store.writer import StoreWriter, current_command
+from ..store.provenance import current_command
+from ..store.writer import StoreWriter
 from .config import LinkConfig, SceneConfig
 from .model import assemble, frequency_response
 

@@ -180,14 +180,10 @@ def follow(source: IO[str], cfg: DetectorConfig, *, rate_hz: float, name: str,
 
 def write_samples(values: np.ndarray, path: str | Path) -> Path:
     """Write (n,) samples as text, one per line (what :func:`follow` reads), atomically."""
-    import os
+    from ..store.atomic import atomic_file
 
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with open(tmp, "w", encoding="ascii", newline="\n") as f:
-            np.savetxt(f, np.asarray(values, dtype=np.float64).reshape(-1), fmt="%.6g")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_file(path, overwrite=True) as tmp, open(tmp, "w", encoding="ascii",
+                                                         newline="\n") as f:
+        np.savetxt(f, np.asarray(values, dtype=np.float64).reshape(-1), fmt="%.6g")
     return path

@@ -345,7 +345,7 @@ def simulate_digit_avoidance(cfg: AvoidanceConfig, out: str | Path, *, seed: int
     one trial per ``cfg.objects`` entry, everything fixed by ``seed``. The folder is
     built beside ``out`` and renamed on success."""
     from .._version import __version__
-    from ..store.writer import current_command
+    from ..store.provenance import current_command
 
     seed = check_seed(seed)
     progress = progress or NullProgress()

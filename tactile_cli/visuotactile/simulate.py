@@ -50,7 +50,7 @@ from ..errors import InputError, check_seed
 from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import check_output_folder, output_folder
-from ..store.writer import current_command
+from ..store.provenance import current_command
 from .config import SceneConfig
 from .render import (
     DIGIT_HEIGHT_PX,

@@ -21,7 +21,7 @@ from tactile_cli.ingest.image_sequence import (
 )
 from tactile_cli.samples.images import write_image_sequence
 from tactile_cli.store import StoreWriter, validate_file
-from tactile_cli.store.writer import sha256_of
+from tactile_cli.store.provenance import sha256_of
 
 runner = CliRunner()
 W, H = 20, 14  # tiny frames keep the suite fast; DIGIT's are 320 x 240

@@ -24,7 +24,7 @@ from tactile_cli.learn.perturb import (
     scale_time,
     thin_counts,
 )
-from tactile_cli.store.writer import sha256_of
+from tactile_cli.store.provenance import sha256_of
 
 from .tiny_runs import tiny_runs
 

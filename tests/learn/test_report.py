@@ -13,7 +13,7 @@ from tactile_cli.cli import app
 from tactile_cli.errors import InputError
 from tactile_cli.learn.perturb import perturb_evaluate
 from tactile_cli.learn.report import build_report
-from tactile_cli.store.writer import sha256_of
+from tactile_cli.store.provenance import sha256_of
 
 from .tiny_runs import tiny_runs
 

@@ -13,7 +13,7 @@ import pytest
 
 from tactile_cli.learn.report import build_report
 from tactile_cli.store import StoreWriter
-from tactile_cli.store.writer import sha256_of
+from tactile_cli.store.provenance import sha256_of
 
 from .tiny_runs import tiny_runs
 

@@ -18,9 +18,9 @@ from tactile_cli.events.accumulate import counts_to_labels
 from tactile_cli.spatial import Roi, roi_centroid_series
 from tactile_cli.spatial.stream import centroid_features, channel_names, channel_units
 from tactile_cli.store import validate_file
+from tactile_cli.store.provenance import sha256_of
 from tactile_cli.store.reader import recording_hashes
 from tactile_cli.store.trials import TactileFile
-from tactile_cli.store.writer import sha256_of
 from tactile_cli.vocabulary import ACTIONS
 
 from ..factories.strip_events import OPTICS, STRIP_ROIS, make_strip_events, write_trials

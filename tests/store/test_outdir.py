@@ -8,8 +8,8 @@ import pytest
 from tactile_cli import interrupt
 from tactile_cli.errors import InputError
 from tactile_cli.interrupt import Interrupted
-from tactile_cli.store.outdir import check_output_file, check_output_folder, output_folder
-from tactile_cli.store.writer import _LIVE_TEMPORARIES, remove_live_temporaries
+from tactile_cli.store.atomic import LIVE_TEMPORARIES, check_output_file, remove_live_temporaries
+from tactile_cli.store.outdir import check_output_folder, output_folder
 
 
 @pytest.fixture(autouse=True)
@@ -26,11 +26,11 @@ def test_success_renames_the_folder_into_place_and_leaves_no_temporary(tmp_path)
     out = tmp_path / "out"
     with output_folder(out) as tmp:
         assert tmp.parent == tmp_path and tmp.name.startswith(".out.tmp-")
-        assert tmp in _LIVE_TEMPORARIES
+        assert tmp in LIVE_TEMPORARIES
         (tmp / "a.txt").write_text("a")
     assert _tree(out) == {"a.txt": "a"}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
-    assert tmp not in _LIVE_TEMPORARIES
+    assert tmp not in LIVE_TEMPORARIES
 
 
 def test_an_error_leaves_no_target_no_temporary_and_no_created_parents(tmp_path):

@@ -354,7 +354,7 @@ def test_a_killed_writer_not_yet_reaped_counts_as_dead():
     its temporaries are stale: a retry on another worker must not leave them behind."""
     import time
 
-    from tactile_cli.store.writer import process_alive
+    from tactile_cli.store.atomic import process_alive
 
     child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:

@@ -13,8 +13,8 @@ import pytest
 from tactile_cli import __version__
 from tactile_cli.errors import InputError, SchemaError
 from tactile_cli.store import StoreWriter, validate_file
+from tactile_cli.store.atomic import LIVE_TEMPORARIES, remove_live_temporaries
 from tactile_cli.store.update import DerivedUpdate, check_derived_targets, update_derived
-from tactile_cli.store.writer import _LIVE_TEMPORARIES, remove_live_temporaries
 
 
 def _digest(path) -> str:
@@ -70,7 +70,7 @@ def test_error_inside_the_block_leaves_the_original_byte_identical(h5file):
             raise RuntimeError("boom")
     assert _digest(h5file) == before
     assert _temporaries(h5file) == []
-    assert not _LIVE_TEMPORARIES
+    assert not LIVE_TEMPORARIES
 
 
 def test_interrupt_inside_the_block_leaves_the_original_byte_identical(h5file):
@@ -95,14 +95,14 @@ def test_a_copy_that_breaks_the_schema_is_not_renamed(h5file):
 def test_live_temporary_is_registered_for_ctrl_c(h5file):
     update = DerivedUpdate(h5file, [("fits", "a")])
     try:
-        assert update.tmp in _LIVE_TEMPORARIES and update.tmp.exists()
+        assert update.tmp in LIVE_TEMPORARIES and update.tmp.exists()
         update._h5.close()  # what the CLI's interrupt handler finds: an open, unfinished copy
         update._h5 = None
         remove_live_temporaries()
         assert not update.tmp.exists()
     finally:
         update.abort()
-    assert not _LIVE_TEMPORARIES
+    assert not LIVE_TEMPORARIES
 
 
 def test_existing_group_needs_overwrite(h5file):
