@@ -297,11 +297,6 @@ def test_rss_is_derived_for_groups_written_before_it_was_stored(fitted, tmp_path
 
 
 # ----------------------------------------------------------------- the marker-event scene
-needs_scene = pytest.mark.skipif(importlib.util.find_spec("tactile_cli.scene") is None,
-                                 reason="tactile_cli.scene (tactile simulate) not present")
-
-
-@needs_scene
 def test_scene_end_to_end(tmp_path):
     """12 force levels of the scene: simulate, ingest with annotations and labels, fit-fos,
     compare with trials.csv. Measured (seed 0, group 1): press alpha and tau within 5 % for

@@ -10,13 +10,10 @@ spread beyond +-5 %, alpha_1 jitter beyond 1.5 %, saturation r >= 0.9.
 
 from __future__ import annotations
 
-import pytest
 import yaml
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
-
-scene_mod = pytest.importorskip("tactile_cli.scene", reason="the marker-event scene is absent")
 
 runner = CliRunner()
 

@@ -73,7 +73,8 @@ def test_gradients_from_normals_inverts_the_normals() -> None:
 
 
 def test_scene_normals_round_trip() -> None:
-    render = pytest.importorskip("tactile_cli.visuotactile.render")
+    from tactile_cli.visuotactile import render
+
     h = sphere_cap(SHAPE, (150.0, 110.0), 3.0, 0.8, PX_PER_MM)
     n = render.surface_normals(h, PX_PER_MM)
     gx, gy = gradients_from_normals(np.asarray(n, dtype=np.float64))
