@@ -82,7 +82,7 @@ def test_each_file_on_a_worker_equals_one_evaluation_per_file(fnn_run, action_fi
         assert got["heads"] == want["heads"]
         assert got["n_windows"] == want["n_windows"] and got["latency"] is None
         accuracy = item["value"]["summary"]["heads"]["action"]["accuracy"]
-        assert accuracy == pytest.approx(want["heads"]["action"]["accuracy"])
+        assert accuracy == want["heads"]["action"]["accuracy"]
         assert (folder / "predictions.csv").read_bytes() == csv[stem]
     assert not [p for p in (run / "eval").iterdir() if p.name.startswith(".")]
 
