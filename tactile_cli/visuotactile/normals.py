@@ -252,8 +252,9 @@ class NormalModel:
 
 
 class _blas_threads:  # noqa: N801 (a context manager used like a function)
-    """Limit every loaded BLAS (numpy's and scipy's OpenBLAS) to ``n`` threads inside the
-    block (threadpoolctl), restoring the previous counts after it."""
+    """Limit BLAS to ``n`` threads inside the block (threadpoolctl: every BLAS loaded when
+    it is first used, numpy's OpenBLAS among them), restoring the previous counts after
+    it."""
 
     def __init__(self, n: int):
         self.n = n
