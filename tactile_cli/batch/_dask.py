@@ -14,7 +14,8 @@ Where the tasks run:
   an existing cluster; its workers must import the same ``tactile_cli`` and see the same
   paths (a shared file system);
 - ``workers=0``: in this process, one task after another (tests and debugging; the same
-  results, no cluster).
+  results, no cluster: every task runs with one-threaded BLAS and OpenMP, as in a local
+  worker, see :func:`_guarded`).
 
 At most one task per worker thread is submitted at a time (the next when one finishes),
 so a long task never waits behind another on a busy worker while a free one idles, and the
@@ -130,10 +131,19 @@ def _lost(exc: BaseException) -> str:
 
 def _guarded(func: Callable[[Any], Any], spec: Any) -> tuple[bool, Any, str | None, float]:
     """Run one task where it lands: (ok, value, error, seconds); an exception is caught
-    here, so it never has to pickle and never stops the batch."""
+    here, so it never has to pickle and never stops the batch.
+
+    Every task runs with one BLAS and one OpenMP thread, wherever it lands: a local
+    worker gets that from distributed's environment (``OPENBLAS_NUM_THREADS=1`` and the
+    like), and ``workers=0`` or an existing cluster's workers must run the same way, or a
+    BLAS call's summation order (and the last bit of a result) would depend on the number
+    of workers."""
+    from threadpoolctl import threadpool_limits
+
     started = time.perf_counter()
     try:
-        value = func(spec)
+        with threadpool_limits(limits=1):
+            value = func(spec)
     except Exception as exc:  # a failed task is a result, not a stop
         return False, None, one_line(exc), time.perf_counter() - started
     return True, value, None, time.perf_counter() - started

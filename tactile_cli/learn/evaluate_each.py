@@ -51,9 +51,14 @@ def evaluate_task(spec: dict[str, Any]) -> dict[str, Any]:
 
     from .evaluate import evaluate
 
+    previous = torch.get_num_threads()
     torch.set_num_threads(1)  # one thread per task: the workers share the cores
-    result = evaluate(spec["run"], [spec["input"]], split=spec["split"], name=spec["name"],
-                      latency=False, overwrite=spec["overwrite"], command=spec["command"])
+    try:  # (restored: with workers=0 the task runs in the caller's process)
+        result = evaluate(spec["run"], [spec["input"]], split=spec["split"],
+                          name=spec["name"], latency=False, overwrite=spec["overwrite"],
+                          command=spec["command"])
+    finally:
+        torch.set_num_threads(previous)
     return {"out_dir": str(result.out_dir), "summary": runs.json_safe(_summary(result)),
             "notes": [*result.notes, *result.warnings]}
 

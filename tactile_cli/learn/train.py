@@ -175,16 +175,31 @@ def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
     return {k: torch.from_numpy(np.ascontiguousarray(v[idx])) for k, v in ws.targets.items()}
 
 
+#: torch CPU threads of :func:`predict`, whatever the caller's (see there)
+PREDICT_THREADS = 1
+
+
 def predict(model: nn.Module, ws: WindowSet, *, batch_size: int = 4096
             ) -> dict[str, np.ndarray]:
-    """Raw outputs (logits or standardised values) of every window: head -> (n, k) / (n,)."""
+    """Raw outputs (logits or standardised values) of every window: head -> (n, k) / (n,).
+
+    Bit-identical whatever the process's torch thread count (a Dask worker runs with one,
+    ``workers=0`` and a plain ``evaluate`` with the machine's cores): torch splits a
+    layer's reductions by its intra-op thread count, which changes the last bit of some
+    outputs, so every batch of ``batch_size`` windows runs on :data:`PREDICT_THREADS`
+    thread(s) and the caller's count is restored afterwards."""
     model.eval()
     outs: dict[str, list[np.ndarray]] = {}
-    with torch.inference_mode():
-        for lo in range(0, len(ws), batch_size):
-            idx = np.arange(lo, min(lo + batch_size, len(ws)))
-            for k, v in model(torch.from_numpy(ws.windows(idx))).items():
-                outs.setdefault(k, []).append(v.numpy())
+    previous = torch.get_num_threads()
+    torch.set_num_threads(PREDICT_THREADS)
+    try:
+        with torch.inference_mode():
+            for lo in range(0, len(ws), batch_size):
+                idx = np.arange(lo, min(lo + batch_size, len(ws)))
+                for k, v in model(torch.from_numpy(ws.windows(idx))).items():
+                    outs.setdefault(k, []).append(v.numpy())
+    finally:
+        torch.set_num_threads(previous)
     return {k: np.concatenate(v) for k, v in outs.items()}
 
 

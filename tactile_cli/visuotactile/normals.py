@@ -15,9 +15,10 @@ only then, inside ``learn/``) and infers with float32 numpy:
 - the (H * W, 6) input buffer [colour, x, y, 1] is kept per frame size: only the colour
   columns are written per frame;
 - pixels go through the layers in tiles of :data:`TILE_PX` (the activations stay in the
-  L2 cache), the tiles shared between ``workers`` threads with one-threaded BLAS each
-  (numpy's matmul releases the GIL; threadpoolctl, where installed, keeps BLAS from
-  starting threads of its own inside them).
+  L2 cache), each tile with one-threaded BLAS (threadpoolctl), the tiles shared between
+  ``workers`` threads (numpy's matmul releases the GIL): a tile's rows and its BLAS
+  threads do not depend on ``workers``, so the normals are bit-identical for any
+  ``workers``.
 
 Inputs: x = column index, y = row index (pixels); dR = R(frame) - R(reference) as a signed
 float in 0-255 units.
@@ -191,16 +192,22 @@ class NormalModel:
                 np.multiply(x, k, out=x)
                 np.matmul(x, w_out, out=out[s:e])
 
+        # Bit-identical for every `workers`: a GEMM's summation order depends on its rows
+        # and on BLAS's own thread count (OpenBLAS splits a threaded GEMM into other
+        # kernels and edges than a one-threaded one; Haswell and Zen kernels differ in the
+        # last bit). So every tile is TILE_PX rows from a multiple of TILE_PX and runs
+        # with one-threaded BLAS, workers=1 included; workers only share out the tiles.
         n_tiles = -(-n // TILE_PX)
         workers = max(1, min(workers, n_tiles))
-        if workers == 1:
-            tiles(range(0, n, TILE_PX))
-            return out
-        # each thread takes every workers-th tile with one-threaded BLAS (numpy releases
-        # the GIL in matmul): no nested thread pools fighting over the cores
-        with _blas_threads(1), ThreadPoolExecutor(workers) as pool:
-            list(pool.map(tiles, [range(i * TILE_PX, n, workers * TILE_PX)
-                                  for i in range(workers)]))
+        with _blas_threads(1):
+            if workers == 1:
+                tiles(range(0, n, TILE_PX))
+                return out
+            # each thread takes every workers-th tile (numpy releases the GIL in matmul):
+            # no nested thread pools fighting over the cores
+            with ThreadPoolExecutor(workers) as pool:
+                list(pool.map(tiles, [range(i * TILE_PX, n, workers * TILE_PX)
+                                      for i in range(workers)]))
         return out
 
     def predict(self, frame: np.ndarray, reference: np.ndarray, *,
@@ -245,8 +252,9 @@ class NormalModel:
 
 
 class _blas_threads:  # noqa: N801 (a context manager used like a function)
-    """Limit BLAS to ``n`` threads inside the block, where threadpoolctl is installed
-    (else a no-op: the result is the same, only slower)."""
+    """Limit BLAS to ``n`` threads inside the block (threadpoolctl: every BLAS loaded when
+    it is first used, numpy's OpenBLAS among them), restoring the previous counts after
+    it."""
 
     def __init__(self, n: int):
         self.n = n
@@ -257,10 +265,8 @@ class _blas_threads:  # noqa: N801 (a context manager used like a function)
 
     def __enter__(self) -> None:
         if _blas_threads._controller is None:
-            try:
-                from threadpoolctl import ThreadpoolController
-            except ImportError:  # pragma: no cover - installed with the ml extra
-                return
+            from threadpoolctl import ThreadpoolController
+
             _blas_threads._controller = ThreadpoolController()
         self._limit = _blas_threads._controller.limit(  # type: ignore[attr-defined]
             limits=self.n, user_api="blas")

@@ -255,3 +255,38 @@ def test_a_diverging_training_is_an_error_not_a_silent_run(tmp_path, action_file
         train(cfg, [action_file], tmp_path / "run")
     assert not (tmp_path / "run").exists()
     assert not list(tmp_path.glob(".run.*"))  # no temporary folder left behind
+
+
+def test_predictions_are_the_same_bits_on_any_torch_thread_count():
+    """Issue 30: torch splits a layer's reductions by its intra-op thread count (3 of 4,096
+    regression outputs of this network differed between 1 and 3 threads), so
+    :func:`predict` runs on one thread whatever the caller's count, and gives it back."""
+    from tactile_cli.learn.data import WindowSet
+    from tactile_cli.learn.heads import HeadSpec
+    from tactile_cli.learn.models import build_model
+    from tactile_cli.learn.train import predict
+
+    window, n, c = 64, 4096, 4
+    heads = [HeadSpec("action", "classification", "sample", classes=("a", "b", "c", "d")),
+             HeadSpec("force", "regression", "sample")]
+    torch.manual_seed(0)
+    model = build_model(tiny_config(model={"family": "fnn", "hidden": [64, 64]}).model,
+                        window=window, n_channels=c, heads=heads)
+    x = np.random.default_rng(0).standard_normal((n * window, c)).astype(np.float32)
+    ws = WindowSet(x=x, starts=np.arange(n) * window, window=window, targets={},
+                   trial_index=np.zeros(n, dtype=np.int64), end_index=np.arange(n),
+                   target_index=np.arange(n), target_t_s=np.arange(n) * 1e-3,
+                   near_boundary={}, trials=["t"])
+    previous = torch.get_num_threads()
+    outputs = {}
+    try:
+        for threads in (1, 2, 3):
+            torch.set_num_threads(threads)
+            outputs[threads] = predict(model, ws)
+            assert torch.get_num_threads() == threads
+    finally:
+        torch.set_num_threads(previous)
+    assert outputs[1]["force"].shape == (n,) and outputs[1]["action"].shape == (n, 4)
+    for threads in (2, 3):
+        for head in ("action", "force"):
+            np.testing.assert_array_equal(outputs[threads][head], outputs[1][head])

@@ -168,3 +168,23 @@ def test_bins_methods_agree():
                                rtol=0, atol=1e-12)
     with pytest.raises(ValueError):
         group_square_coherence_bins(spectra, method="qr")
+
+
+@pytest.mark.parametrize("method", ["auto", "tridiagonal", "eigvalsh"])
+def test_windows_are_the_same_bits_for_any_worker_count(method: str) -> None:
+    """Issue 30: chunks of a fixed size, each on one-threaded BLAS whatever ``workers``
+    and whatever the caller's BLAS thread count: bit-identical G2."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    x = np.random.default_rng(11).standard_normal((7, 1024, 12))
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+        _, one = group_square_coherence_windows(x, RATE_HZ, nperseg=128, chunk=2,
+                                                method=method)
+        # the caller's BLAS setting is given back
+        assert [i["num_threads"] for i in threadpool_info()
+                if i["user_api"] == "blas"] == before
+    for workers in (2, 3):
+        _, got = group_square_coherence_windows(x, RATE_HZ, nperseg=128, chunk=2,
+                                                workers=workers, method=method)
+        np.testing.assert_array_equal(got, one)

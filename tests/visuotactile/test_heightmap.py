@@ -70,6 +70,25 @@ def test_both_sources_side_by_side_from_frames(scene: dict[str, Path]) -> None:
     assert res.as_dict(with_signal=False)["summary"]["height"]["n_slip"] == 1
 
 
+def test_heights_and_slip_signal_are_the_same_bits_for_any_worker_count(
+        scene: dict[str, Path], tmp_path: Path) -> None:
+    """Issue 30: the network's tiles and the FFTs give the same bits for any ``workers``,
+    so the stored heights and the slip signal on them do too."""
+    heights = {}
+    for workers in (1, 2, 3):
+        keep: dict[str, np.ndarray] = {}
+        heightmap_file(scene["frames"], scene["run"], tmp_path / f"h{workers}.h5",
+                       trials=["t_00"], workers=workers, keep=keep)
+        heights[workers] = keep["t_00"]
+    np.testing.assert_array_equal(heights[2], heights[1])
+    np.testing.assert_array_equal(heights[3], heights[1])
+    signals = [slip_signal_file(scene["frames"], source="height", run_dir=scene["run"],
+                                mesh=(16, 12), trials=["t_01"], workers=workers
+                                ).trials[0].detection.signal for workers in (1, 2)]
+    np.testing.assert_array_equal(signals[1], signals[0])
+    assert np.isfinite(signals[0][1:]).all() and signals[0][1:].max() > 0
+
+
 def test_mapper_skip_below_zero_is_exact(scene: dict[str, Path]) -> None:
     model = NormalModel.from_run(scene["run"])
     with TactileFile(scene["frames"]) as tf:

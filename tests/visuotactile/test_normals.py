@@ -69,6 +69,35 @@ def test_predict_frame_equals_torch_and_threads_agree(runs: dict[str, Path]) -> 
     np.testing.assert_allclose(np.linalg.norm(one, axis=-1), 1.0, atol=1e-6)
 
 
+def test_normals_are_the_same_bits_for_any_worker_count(runs: dict[str, Path]) -> None:
+    """Issue 30: with OPENBLAS_CORETYPE=Haswell, 1,557 of 9,216 normals differed by up to
+    1.2e-7 between workers=1 (BLAS on its own two threads) and workers=2 (one-threaded
+    BLAS per tile). Tiles are now fixed and every one runs one-threaded BLAS, whatever
+    ``workers`` and whatever the caller's BLAS thread count."""
+    from threadpoolctl import threadpool_limits
+
+    from tactile_cli.visuotactile.normals import TILE_PX
+
+    model = NormalModel.from_run(runs["difference"])
+    rng = np.random.default_rng(5)
+    shape = (96, 80)  # 7,680 px: three full tiles and a part tile
+    assert 3 * TILE_PX < shape[0] * shape[1] < 4 * TILE_PX
+    ref = shade(np.zeros(shape), noise_std=1.0, rng=rng)
+    frame = shade(sphere_cap(shape, (40.0, 50.0), 2.5, 0.6), noise_std=1.0, rng=rng)
+    active = np.abs(frame.astype(np.int16) - ref).max(axis=-1) >= 2
+    assert TILE_PX < active.sum() < shape[0] * shape[1]
+    with threadpool_limits(limits=2, user_api="blas"):  # the caller's BLAS has threads
+        one = model.predict(frame, ref, workers=1)
+        part = model.predict(frame, ref, workers=1, active=active)
+    for workers in (2, 3, 4):
+        np.testing.assert_array_equal(model.predict(frame, ref, workers=workers), one)
+        np.testing.assert_array_equal(model.predict(frame, ref, workers=workers,
+                                                    active=active), part)
+    np.testing.assert_array_equal(model.predict_pixels(np.c_[
+        np.mgrid[0:96, 0:80][::-1].reshape(2, -1).T,
+        (frame.astype(np.float32) - ref).reshape(-1, 3)]), one.reshape(-1, 3))
+
+
 def test_a_flat_frame_is_nearly_flat(runs: dict[str, Path]) -> None:
     model = NormalModel.from_run(runs["difference"])
     ref = shade(np.zeros((48, 64)))
