@@ -38,9 +38,11 @@ def band_grid(n_bins: int, max_bins: int) -> tuple[np.ndarray, np.ndarray]:
 
 def band_centre_width_hz(f_hz: np.ndarray, lo_bin: np.ndarray, hi_bin: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray]:
-    """The paper's (f, w) of each band: centre and half-width (Hz) of the bins' span."""
+    """The paper's (f, w) of each band: centre and half-width (Hz) of the bins' span, so
+    that the band's bins are k = (f - w) / f0 .. (f + w) / f0 as in eq. 4 (w = 0 for a
+    band of one bin)."""
     df = float(f_hz[1] - f_hz[0])
-    return (f_hz[lo_bin] + f_hz[hi_bin]) / 2, (hi_bin - lo_bin + 1) * df / 2
+    return (f_hz[lo_bin] + f_hz[hi_bin]) / 2, (hi_bin - lo_bin) * df / 2
 
 
 def masked_g2(csd: np.ndarray, mask: np.ndarray) -> np.ndarray:
