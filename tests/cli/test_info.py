@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.store import StoreWriter, summarize
 from tactile_cli.store.labels import MAX_VALUES_LISTED
 
@@ -101,8 +101,8 @@ def test_numbers_sort_by_value(tmp_path):
 
 def test_real_xela_slip_counts(tmp_path):
     root = shared_path("xela_slip")
-    out = ingest([root], tmp_path / "x.h5", options=IngestOptions(
-        mapping=REPO / "configs" / "xela_slip.yaml"), command="test")
+    out = ingest([root], tmp_path / "x.h5", options={
+        "mapping": REPO / "configs" / "xela_slip.yaml"}, command="test")
     result = runner.invoke(app, ["info", str(out)])
     assert result.exit_code == 0, result.output
     assert "no_slip: 1,999, slip: 196 (2,195 samples)" in result.output
