@@ -266,8 +266,8 @@ class AccelTreeFormat(IngestFormat[AccelTreeOptions]):
 
     name = "accel-tree"
     title = "accelerometer CSV tree"
-    summary = ("paper 001's accelerometer CSV tree <object>/<orientation>/<speed>/<file>.csv "
-               "(6 accelerations, 2 velocities), one trial per CSV")
+    summary = ("paper 001's accelerometer CSV tree (object, orientation and speed folders; 6 "
+               "accelerations and 2 velocities per row), one trial per CSV")
     Options = AccelTreeOptions
 
     def sniff(self, path: Path) -> bool:
