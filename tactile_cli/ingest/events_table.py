@@ -288,6 +288,9 @@ def _read_header(f: io.BufferedReader, path: Path) -> list[str]:
     extra = [c for c in names if c not in COLUMNS]
     if missing:
         hint = "" if set(names) & set(COLUMNS) else " (the first line must be a header: t,x,y,p)"
+        if not set(names) & {"x", "y", "p"}:  # not an event table at all
+            hint += ("; a CSV of another sensor is read with a mapping (`mapping='FILE.yaml'`, "
+                     "see configs/mapping_example.yaml)")
         raise InputError(f"missing column{'s' if len(missing) > 1 else ''} "
                          f"{', '.join(map(repr, missing))}; the header names {names}{hint}",
                          path=path, where="line 1")
