@@ -64,11 +64,11 @@ def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]
         import pandas  # noqa: F401  (imports off the clock, as for the baseline)
 
         import tactile_cli.ingest.events_table  # noqa: F401
-        from tactile_cli.ingest import IngestOptions, ingest
+        from tactile_cli.ingest import ingest
         from tactile_cli.store.writer import Compression
 
         start = time.perf_counter()
-        ingest([src], out, options=IngestOptions(width_px=WIDTH, height_px=HEIGHT),
+        ingest([src], out, options={"width_px": WIDTH, "height_px": HEIGHT},
                compression=Compression(level), overwrite=True, command="benchmark")
         seconds = time.perf_counter() - start
     elif kind == "pandas-csv":

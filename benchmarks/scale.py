@@ -155,7 +155,7 @@ def sweep_data(folder: Path) -> tuple[Path, Path]:
     """Prepared vibro-slip scenes of seeds 0 (train) and 1 (test), as `make demo-accel`."""
     from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
     from tactile_cli.accel.prepare import prepare_file
-    from tactile_cli.ingest import IngestOptions, ingest
+    from tactile_cli.ingest import ingest
 
     out = []
     for seed in (0, 1):
@@ -163,9 +163,8 @@ def sweep_data(folder: Path) -> tuple[Path, Path]:
         simulate_vibro_slip(VibroSceneConfig.model_validate({"duration_s": 2.0}), scene,
                             seed=seed)
         raw = ingest([scene], folder / f"scene{seed}.h5",
-                     options=IngestOptions(format="accel-tree",
-                                           labels={"origin": "simulated",
-                                                   "dataset": f"vibro-slip seed {seed}"}))
+                     format="accel-tree",
+                     labels={"origin": "simulated", "dataset": f"vibro-slip seed {seed}"})
         out.append(prepare_file(raw, folder / f"prepared{seed}.h5", segment_s=0.5).out)
     return out[0], out[1]
 

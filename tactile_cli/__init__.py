@@ -4,6 +4,7 @@ The library API (importable in a notebook without the CLI)::
 
     import tactile_cli as tc
     tc.ingest(["rec.aedat4"], "rec.h5")
+    tc.describe_recording("rec.aedat4").streams      # what tactile info RAW prints
     tc.validate_file("rec.h5").ok
     with tc.TactileFile("rec.h5") as f:
         for trial in f:
@@ -23,7 +24,7 @@ from ._version import __version__ as __version__
 from .errors import InputError as InputError
 from .errors import SchemaError as SchemaError
 from .errors import TactileError as TactileError
-from .ingest import IngestOptions as IngestOptions
+from .ingest import describe_recording as describe_recording
 from .ingest import ingest as ingest
 from .store import StoreWriter as StoreWriter
 from .store import TactileFile as TactileFile

@@ -1,26 +1,46 @@
-"""`tactile info FILE`"""
+"""`tactile info FILE` (a tactile HDF5 file) and `tactile info RAW` (a raw recording of any
+format `tactile ingest` reads, described read-only)"""
 
 from __future__ import annotations
 
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from ..ingest import describe_recording, parse_options, raw_format
 from ..store.reader import FileSummary, summarize
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded, to_flags
+from ._ingest_flags import OPTION_FLAGS
+
+if TYPE_CHECKING:
+    from ..ingest import RecordingSummary
 
 #: Trials listed in the trials table; a longer file shows the first and last halves.
 MAX_TRIALS_SHOWN = 40
+#: How this command spells the library arguments its errors name.
+FLAGS: dict[str, Flag] = {"format": "--format", "mapping": "--mapping", "options": "--option",
+                          "json": "--json"}
 
 
 def info_command(
-    file: Annotated[Path, typer.Argument(help="A tactile HDF5 file (or a raw AEDAT4 file).",
-                                         metavar="FILE", show_default=False)],
+    file: Annotated[Path, typer.Argument(
+        help="A tactile HDF5 file, or a raw recording of any format tactile ingest reads "
+        "(a file or a folder).", metavar="FILE", show_default=False)],
+    fmt: Annotated[str, typer.Option(
+        "--format", "-f", help="Raw recordings: their format (default auto: told from the "
+        "input; see tactile ingest --help).", metavar="NAME")] = "auto",
+    mapping: Annotated[Path | None, typer.Option(
+        help="Raw sensor CSVs: the YAML mapping to describe them with (streams, rates, "
+        "stamps, columns left out); without it their columns are listed.", metavar="FILE")
+    ] = None,
+    option: Annotated[list[str] | None, typer.Option(
+        "--option", "-O", help="Raw recordings: a format option by its name, KEY=VALUE "
+        "(repeatable; see tactile ingest --help).", metavar="KEY=VALUE")] = None,
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print the summary as JSON (every channel name and label value).")
     ] = False,
@@ -28,14 +48,16 @@ def info_command(
     """Print sensors (streams, rate, channels, units), trials, trial labels (trials per
     value), per-sample labels (samples per class) and splits of a tactile HDF5 file: what a
     train config names. Labels with many values are summarised; --json lists everything.
-    A raw .aedat4 recording is read without writing anything: its streams (type, name,
-    count, time span, size); other commands need it ingested first."""
+    A raw recording of any format tactile ingest reads (AEDAT4, event CSV/NPY, accelerometer
+    tree, sensor CSVs with --mapping, image folders) is read without writing anything: its
+    streams (type, count, rate and jitter, time span, size, repeated or out-of-order
+    stamps), the trials an ingest would make and what it would leave out; other commands
+    need it ingested first."""
 
     def body() -> None:
-        from ..ingest.aedat4_describe import is_aedat4
-
-        if is_aedat4(file):
-            _aedat4(file, as_json)
+        options = parse_options(option or [], {"mapping": mapping})
+        if fmt != "auto" or options or raw_format(file) is not None:
+            _raw(describe_recording(file, format=fmt, options=options), as_json)
             return
         summary = summarize(file)  # every read failure is one InputError naming the path
         if as_json:
@@ -51,31 +73,60 @@ def info_command(
             console.print(table)
         console.print(_splits(summary), highlight=False)
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)
 
 
-def _aedat4(file: Path, as_json: bool) -> None:
-    from ..ingest.aedat4_describe import describe_aedat4
-
-    summary = describe_aedat4(file)  # a damaged file is one InputError naming it
+def _raw(summary: RecordingSummary, as_json: bool) -> None:
+    """A raw recording's summary: a line, the streams, the trials, what is left out, notes."""
     if as_json:
         typer.echo(json.dumps(summary.as_dict(), indent=2))
         return
     console = Console(width=None if sys.stdout.isatty() else 150)
-    console.print(f"[bold]{summary.file}[/] AEDAT4 recording, {summary.size_bytes:,} bytes, "
-                  f"{len(summary.streams)} stream(s)", highlight=False)
+    console.print(f"[bold]{summary.file}[/] {summary.title} recording, "
+                  f"{summary.size_bytes:,} bytes, {len(summary.streams)} stream(s), "
+                  f"{len(summary.trials)} trial(s)", highlight=False)
     table = Table(title="Streams")
-    for col in ("id", "type", "name", "camera", "count", "first t (us)", "span (s)",
-                "resolution"):
+    for col in ("stream", "type", "count", "rate (Hz)", "jitter (ms)", "first (s)",
+                "span (s)", "resolution", "channels", "stamps repeated / out of order"):
         table.add_column(col)
     for s in summary.streams:
         count = f"{s.count:,} {s.unit}" if s.count is not None else "not readable"
-        span = s.span_s
-        table.add_row(str(s.stream_id), s.type, s.name, s.camera or "", count,
-                      "" if s.t_first_us is None else str(s.t_first_us),
-                      "" if span is None else f"{span:.6f}", s.resolution)
+        stamps = ("" if s.repeated_stamps is None and s.out_of_order_stamps is None
+                  else f"{s.repeated_stamps or 0:,} / {s.out_of_order_stamps or 0:,}")
+        channels = ", ".join(s.channels[:6]) + (f", ... ({len(s.channels)})"
+                                                 if len(s.channels) > 6 else "")
+        table.add_row(s.name, s.type, count, _num(s.rate_hz, "g"),
+                      _num(None if s.jitter_s is None else s.jitter_s * 1e3, ".3g"),
+                      _num(s.t_first_s, ".6f"), _num(s.span_s, ".6f"), s.resolution, channels,
+                      stamps)
     console.print(table)
+    trials = Table(title=f"Trials ({len(summary.trials)})")
+    for col in ("trial", "source", "items", "duration (s)", "labels"):
+        trials.add_column(col)
+    half = MAX_TRIALS_SHOWN // 2
+    shown = (summary.trials if len(summary.trials) <= MAX_TRIALS_SHOWN
+             else summary.trials[:half] + summary.trials[-half:])
+    for t in shown:
+        trials.add_row(t.name, t.source, ", ".join(f"{k} {v:,}" for k, v in t.counts.items()),
+                       _num(t.duration_s, ".3f"),
+                       ", ".join(f"{k}={v}" for k, v in t.labels.items()))
+    if len(shown) < len(summary.trials):
+        trials.caption = f"{len(summary.trials) - len(shown)} trials not shown; use --json for all"
+    console.print(trials)
+    for line in summary.dropped:
+        console.print(f"left out: {line}", highlight=False, soft_wrap=True)
+    for line in summary.notes:
+        console.print(f"note: {_flags(line)}", highlight=False, soft_wrap=True)
     console.print(summary.hint, highlight=False, soft_wrap=True)
+
+
+def _num(value: float | None, spec: str) -> str:
+    return "" if value is None else format(value, spec)
+
+
+def _flags(text: str) -> str:
+    """A library note with the format options it names spelt as ``tactile ingest`` flags."""
+    return to_flags(text, OPTION_FLAGS)
 
 
 def _sensors(summary: FileSummary) -> Table:

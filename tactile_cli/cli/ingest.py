@@ -5,30 +5,27 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from ..errors import InputError
-from ..ingest import FORMATS, IngestOptions, ingest, parse_labels
+from ..ingest import FORMATS, ingest, parse_labels, parse_options
+from ..ingest.registry import formats_taking, option_names
 from ..store.writer import Compression
 from ._batch import BATCH_FLAGS, scheduler_option, workers_option
 from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._ingest_flags import OPTION_FLAGS
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "format": "--format",
-    "mapping": "--mapping",
+    **OPTION_FLAGS,
+    "options": "--option",
     "labels": "--label",
-    "width_px": "--width",
-    "height_px": "--height",
     "annotations": "--annotations",
     "trial_labels": "--trial-labels",
-    "frame_rate_hz": "--fps",
-    "reference": "--reference",
-    "px_per_mm": "--px-per-mm",
-    "skip_unknown": "--skip-unknown",
     "out": "--out",
     "out_dir": "--out-dir",
     **BATCH_FLAGS,
@@ -36,6 +33,23 @@ FLAGS: dict[str, Flag] = {
 }
 OutDirScheduler = scheduler_option("--out-dir: ")
 OutDirWorkers = workers_option("--out-dir: ")
+
+
+def _formats(option: str) -> str:
+    """`` (formats: aedat4, images)``: the formats of the registry that take ``option``."""
+    return f" Formats: {', '.join(formats_taking(option))}."
+
+
+def _format_help() -> str:
+    return ("Input format (default auto: told from the inputs): "
+            + "; ".join(f"{f.name}: {f.summary}" for f in FORMATS.values()) + ".")
+
+
+def _option_help() -> str:
+    others = {k: v for k, v in option_names().items() if k not in OPTION_FLAGS}
+    listed = "; ".join(f"{k} ({', '.join(v)})" for k, v in others.items())
+    return ("A format option by its name, KEY=VALUE (repeatable), for the options without a "
+            f"flag of their own: {listed}.")
 
 
 def ingest_command(
@@ -54,12 +68,12 @@ def ingest_command(
                      metavar="FOLDER", show_default=False),
     ] = None,
     fmt: Annotated[
-        str, typer.Option("--format", "-f", help=f"Input format: auto, {', '.join(FORMATS)}.")
+        str, typer.Option("--format", "-f", help=_format_help(), metavar="NAME")
     ] = "auto",
     mapping: Annotated[
         Path | None,
-        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml).",
-                     metavar="FILE"),
+        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml)."
+                     + _formats("mapping"), metavar="FILE"),
     ] = None,
     label: Annotated[
         list[str] | None,
@@ -67,20 +81,27 @@ def ingest_command(
                      metavar="KEY=VALUE"),
     ] = None,
     width: Annotated[
-        int | None, typer.Option(help="Event sensor width in px (CSV/NPY events).")
+        int | None, typer.Option(help="Event sensor width in px (CSV/NPY events; checked "
+                                 "against AEDAT4 files and frames)." + _formats("width_px"))
     ] = None,
     height: Annotated[
-        int | None, typer.Option(help="Event sensor height in px (CSV/NPY events).")
+        int | None, typer.Option(help="Event sensor height in px (CSV/NPY events; checked "
+                                 "against AEDAT4 files and frames)." + _formats("height_px"))
     ] = None,
     sensor: Annotated[
-        str | None, typer.Option(help="Sensor name to record (default from the input).")
+        str | None, typer.Option(help="Sensor name to record (default from the input)."
+                                 + _formats("sensor_name"))
+    ] = None,
+    option: Annotated[
+        list[str] | None,
+        typer.Option("--option", "-O", help=_option_help(), metavar="KEY=VALUE"),
     ] = None,
     fps: Annotated[
         float | None,
         typer.Option(
             min=0.001, metavar="HZ",
             help="Frame rate of image folders without a timestamps.csv (default: 30 Hz assumed, "
-            "with a note).",
+            "with a note)." + _formats("frame_rate_hz"),
         ),
     ] = None,
     reference: Annotated[
@@ -89,7 +110,8 @@ def ingest_command(
             "--reference", metavar="first|NAME",
             help="Image folders: the no-contact reference frame of every folder: 'first' (the "
             "first frame in natural order, kept as frame 0) or a file name or stem in each "
-            "folder (default: the file named reference, ref, background or no_contact).",
+            "folder (default: the file named reference, ref, background or no_contact)."
+            + _formats("reference"),
         ),
     ] = None,
     px_per_mm: Annotated[
@@ -97,7 +119,8 @@ def ingest_command(
         typer.Option(
             "--px-per-mm", min=0.0, metavar="PX",
             help="Image folders: pixels per millimetre on the gel (DIGIT-like: 16), stored as "
-            "the sensor attribute px_per_mm for calibration and height maps.",
+            "the sensor attribute px_per_mm for calibration and height maps."
+            + _formats("px_per_mm"),
         ),
     ] = None,
     annotations: Annotated[
@@ -120,7 +143,8 @@ def ingest_command(
         typer.Option(
             "--skip-unknown",
             help="AEDAT4: leave out streams of a type tactile does not read (poses, bounding "
-            "boxes, ...), with a note; without it such a file is refused.",
+            "boxes, ...), with a note; without it such a file is refused."
+            + _formats("skip_unknown"),
         ),
     ] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
@@ -140,15 +164,16 @@ def ingest_command(
 ) -> None:
     """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
 
-    Formats: AEDAT4 files (events, APS frames, IMU samples and triggers; --skip-unknown
-    leaves out other stream types), event CSV (t,x,y,p) and NPY structured arrays, the
-    accelerometer CSV tree (object/orientation/speed folders), any sensor CSV described by a
-    YAML mapping file (rows of a table as trials: `layout: rows`), and image-sequence
-    folders of visuotactile sensors (or a folder of such folders, one trial each). Trials
-    are named after the input files (stems) or folders; --annotations and --trial-labels add
-    ground truth keyed by those names. The output is written to a temporary file and renamed
-    into place only when complete and valid. Assumptions the file records (a frame rate for
-    folders without timestamps) are printed as notes on stderr.
+    Formats (--format, default told from the inputs; the table in
+    tactile_cli/ingest/registry.py): AEDAT4 files, event CSV and NPY files, the
+    accelerometer CSV tree, any sensor CSV described by a YAML mapping file (rows of a table
+    as trials: `layout: rows`), and image-sequence folders of visuotactile sensors. Each
+    format takes its own options (an option another format takes is refused, naming the
+    formats that take it). Trials are named after the input files (stems) or folders;
+    --annotations and --trial-labels add ground truth keyed by those names. The output is
+    written to a temporary file and renamed into place only when complete and valid.
+    Assumptions the file records (a frame rate for folders without timestamps, stamps a
+    mapping's policy dropped or spread) are printed as notes on stderr.
 
     With --out-dir instead of --out, each input becomes its own file FOLDER/<input stem>.h5,
     ingested by Dask workers (--workers, --scheduler); outputs newer than their inputs are
@@ -163,37 +188,24 @@ def ingest_command(
         if out is not None and (scheduler is not None or workers is not None or as_json):
             raise InputError("`scheduler`, `workers` and `json` go with `out_dir` (one file "
                              "per input, on Dask); `out` writes one file in this process")
-        options = IngestOptions(
-            format=fmt,
-            mapping=mapping,
-            labels=parse_labels(label or []),
-            width_px=width,
-            height_px=height,
-            sensor_name=sensor,
-            frame_rate_hz=fps,
-            reference=reference,
-            px_per_mm=px_per_mm,
-            annotations=annotations,
-            trial_labels=trial_labels,
-            skip_unknown=skip_unknown,
-        )
+        labels = parse_labels(label or [])
+        flagged = {"mapping": mapping, "width_px": width, "height_px": height,
+                   "sensor_name": sensor, "frame_rate_hz": fps, "reference": reference,
+                   "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None}
+        options = parse_options(option or [], flagged)
+        level = Compression(None if compression < 0 else compression)
         if out_dir is not None:
-            _ingest_each(inputs, out_dir, options=options, overwrite=overwrite,
-                         compression=Compression(None if compression < 0 else compression),
-                         scheduler=scheduler, workers=workers, as_json=as_json,
-                         progress=progress)
+            _ingest_each(inputs, out_dir, fmt=fmt, options=options, labels=labels,
+                         annotations=annotations, trial_labels=trial_labels,
+                         overwrite=overwrite, compression=level, scheduler=scheduler,
+                         workers=workers, as_json=as_json, progress=progress)
             return
         assert out is not None
         with RichProgress(enabled=progress) as bar:
-            path = ingest(
-                inputs,
-                out,
-                options=options,
-                overwrite=overwrite,
-                compression=Compression(None if compression < 0 else compression),
-                progress=bar,
-                on_note=_print_note,
-            )
+            path = ingest(inputs, out, format=fmt, options=options, labels=labels,
+                          annotations=annotations, trial_labels=trial_labels,
+                          overwrite=overwrite, compression=level, progress=bar,
+                          on_note=_print_note)
         typer.echo(f"wrote {path}")
 
     run_guarded(body, flags=FLAGS)
@@ -204,9 +216,11 @@ def _print_note(note: str) -> None:
     print(f"tactile: note: {to_flags(note, {**COMMON_FLAGS, **FLAGS})}", file=sys.stderr)
 
 
-def _ingest_each(inputs: list[Path], out_dir: Path, *, options: IngestOptions, overwrite: bool,
-                 compression: Compression, scheduler: str | None, workers: int | None,
-                 as_json: bool, progress: bool | None) -> None:
+def _ingest_each(inputs: list[Path], out_dir: Path, *, fmt: str, options: dict[str, Any],
+                 labels: dict[str, str | int | float], annotations: Path | None,
+                 trial_labels: Path | None, overwrite: bool, compression: Compression,
+                 scheduler: str | None, workers: int | None, as_json: bool,
+                 progress: bool | None) -> None:
     """``--out-dir``: one file per input on Dask, a line per finished input, a summary
     line; exit 2 when an input failed (after the others are written)."""
     from ..ingest.batch import ingest_each
@@ -216,8 +230,9 @@ def _ingest_each(inputs: list[Path], out_dir: Path, *, options: IngestOptions, o
     printer = FileBatchPrinter("ingest", progress=progress, todo="to ingest",
                                flags=lambda text: to_flags(text, table))
     with printer.running():
-        result = ingest_each(inputs, out_dir, options=options, overwrite=overwrite,
-                             compression=compression, scheduler=scheduler, workers=workers,
-                             on_plan=printer.on_plan, on_progress=printer.on_progress,
-                             on_item=printer.on_item)
+        result = ingest_each(inputs, out_dir, format=fmt, options=options, labels=labels,
+                             annotations=annotations, trial_labels=trial_labels,
+                             overwrite=overwrite, compression=compression,
+                             scheduler=scheduler, workers=workers, on_plan=printer.on_plan,
+                             on_progress=printer.on_progress, on_item=printer.on_item)
     finish_batch(result, as_json=as_json)

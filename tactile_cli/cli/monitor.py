@@ -25,25 +25,23 @@ def _ingested(folder: Path, tmp: Path) -> Path:
     """A folder of frames as a temporary tactile HDF5 file: a scene folder (``trials/``
     beside ``scene.json``) with its trial labels, annotations and ``px_per_mm``; any other
     folder as image-sequence folders without labels."""
-    from ..ingest import IngestOptions, ingest
+    from ..ingest import ingest
 
-    options = IngestOptions(format="images")
-    inputs = folder
     scene = folder / "scene.json"
-    if (folder / "trials").is_dir() and scene.is_file():
-        try:
-            px = float(json.loads(scene.read_text(encoding="utf-8"))["optics"]["px_per_mm"])
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise InputError(f"cannot read optics.px_per_mm ({exc})", path=scene) from None
-        if not (math.isfinite(px) and px > 0):
-            raise InputError(f"optics.px_per_mm is {px}; expected a positive number of "
-                             "pixels per mm", path=scene)
-        labels, notes = folder / "trial_labels.csv", folder / "annotations.csv"
-        options = IngestOptions(format="images", px_per_mm=px,
-                                trial_labels=labels if labels.is_file() else None,
-                                annotations=notes if notes.is_file() else None)
-        inputs = folder / "trials"
-    return ingest([inputs], tmp / "frames.h5", options=options)
+    if not ((folder / "trials").is_dir() and scene.is_file()):
+        return ingest([folder], tmp / "frames.h5", format="images")
+    try:
+        px = float(json.loads(scene.read_text(encoding="utf-8"))["optics"]["px_per_mm"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"cannot read optics.px_per_mm ({exc})", path=scene) from None
+    if not (math.isfinite(px) and px > 0):
+        raise InputError(f"optics.px_per_mm is {px}; expected a positive number of "
+                         "pixels per mm", path=scene)
+    labels, notes = folder / "trial_labels.csv", folder / "annotations.csv"
+    return ingest([folder / "trials"], tmp / "frames.h5", format="images",
+                  options={"px_per_mm": px},
+                  trial_labels=labels if labels.is_file() else None,
+                  annotations=notes if notes.is_file() else None)
 
 
 def monitor_command(

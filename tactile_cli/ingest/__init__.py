@@ -1,18 +1,19 @@
 """`tactile ingest`: raw recordings of any supported format into one tactile HDF5 file.
 
-Each format has its own module with one entry function
-``ingest_<format>(inputs, writer, options, progress)`` that adds sensors and trials to a
-:class:`~tactile_cli.store.StoreWriter` (and may return one-line notes for the user about
-assumptions the file records). :func:`ingest` picks the format, opens the writer
-(temporary file, validation, atomic rename), adds run-wide labels and then the ground-truth
-sidecars (``--annotations``, ``--trial-labels``; see :mod:`tactile_cli.ingest.sidecars`).
+Each format is one module with one :class:`~tactile_cli.ingest.contract.IngestFormat`
+(``sniff``, ``describe``, ``read``) and its typed options model, registered by one line in
+:data:`~tactile_cli.ingest.registry.FORMATS`. :func:`ingest` picks the format (``format``,
+else told from the inputs), builds its options, opens the writer (temporary file,
+validation, atomic rename), lets the format's ``read`` add sensors and trials, then adds
+the options every format shares (:class:`~tactile_cli.ingest.contract.CommonOptions`):
+run-wide labels and the ground-truth sidecars (``annotations``, ``trial_labels``; see
+:mod:`tactile_cli.ingest.sidecars`). :func:`describe_recording` is the read-only look at a
+raw recording that ``tactile info`` prints.
 """
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,92 +21,26 @@ from ..config_file import missing_file_error
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter
-
-#: format name -> "module:function" (imported on use, so the CLI starts fast)
-FORMATS: dict[str, str] = {
-    "aedat4": "tactile_cli.ingest.events_aedat4:ingest_aedat4",
-    "events-csv": "tactile_cli.ingest.events_table:ingest_events_csv",
-    "events-npy": "tactile_cli.ingest.events_table:ingest_events_npy",
-    "accel-tree": "tactile_cli.ingest.accel_tree:ingest_accel_tree",
-    "mapped-csv": "tactile_cli.ingest.mapped_csv:ingest_mapped_csv",
-    "images": "tactile_cli.ingest.image_sequence:ingest_image_sequence",
-}
-
-IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg"}
-
-
-@dataclass
-class IngestOptions:
-    """Options shared by all formats (each format reads the ones it needs)."""
-
-    format: str = "auto"
-    mapping: Path | None = None  # YAML mapping file for mapped-csv
-    labels: dict[str, str | int | float] = field(default_factory=dict)  # added to every trial
-    width_px: int | None = None  # event sensor geometry for CSV/NPY events
-    height_px: int | None = None
-    sensor_name: str | None = None
-    chunk_events: int = 1 << 20  # events read per chunk while streaming
-    frame_rate_hz: float | None = None  # image folders without timestamps.csv (default 30 Hz)
-    annotations: Path | None = None  # CSV trial,start_s,end_s,label (see ingest.sidecars)
-    trial_labels: Path | None = None  # CSV trial,<label>... (see ingest.sidecars)
-    skip_unknown: bool = False  # AEDAT4: leave out streams of unknown type (else an error)
-    reference: str | None = None  # image folders: "first" or a file name (default: by name)
-    px_per_mm: float | None = None  # image folders: gel scale, stored as a sensor attribute
-
-    def as_config(self) -> dict[str, Any]:
-        out = asdict(self)
-        for key in ("mapping", "annotations", "trial_labels"):
-            value = getattr(self, key)
-            out[key] = None if value is None else str(value)
-        return out
-
-
-def detect_format(inputs: Sequence[Path], options: IngestOptions) -> str:
-    """The format of the inputs: explicit ``options.format`` or inferred from them."""
-    if options.format != "auto":
-        if options.format not in FORMATS:
-            raise InputError(f"unknown format {options.format!r}; use one of: {', '.join(FORMATS)}")
-        return options.format
-    if options.mapping is not None:
-        return "mapped-csv"
-    kinds = set()
-    for path in inputs:
-        if path.is_dir():
-            from .image_sequence import image_sequence_folders
-
-            if image_sequence_folders(path):  # frames, or folders of frames
-                kinds.add("images")
-            else:
-                raise InputError(
-                    "cannot tell the format of a folder (no PNG/JPG frames in it or in its "
-                    "subfolders); pass `format='accel-tree'`, `format='images'`, or "
-                    "`mapping='FILE.yaml'`",
-                    path=path,
-                )
-        elif path.suffix.lower() == ".aedat4":
-            kinds.add("aedat4")
-        elif path.suffix.lower() == ".npy":
-            kinds.add("events-npy")
-        elif path.suffix.lower() == ".csv":
-            kinds.add("events-csv")
-        else:
-            raise InputError(
-                f"unknown format (suffix {path.suffix or 'none'!r}); supported: .aedat4, "
-                ".npy, .csv events, folders with `format` or `mapping`",
-                path=path,
-            )
-    if len(kinds) != 1:
-        raise InputError(
-            f"inputs mix formats ({', '.join(sorted(kinds))}); ingest each format separately"
-        )
-    return kinds.pop()
+from .contract import (
+    CommonOptions,
+    FormatOptions,
+    IngestFormat,
+    RecordingSummary,
+    StreamSummary,
+    TrialSummary,
+)
+from .registry import AUTO, FORMATS, detect_format, format_options, get_format
 
 
 def ingest(
     inputs: Sequence[str | Path],
     out: str | Path,
     *,
-    options: IngestOptions | None = None,
+    format: str = AUTO,
+    options: Mapping[str, Any] | FormatOptions | None = None,
+    labels: Mapping[str, str | int | float] | None = None,
+    annotations: str | Path | None = None,
+    trial_labels: str | Path | None = None,
     overwrite: bool = False,
     compression: Compression = DEFAULT_COMPRESSION,
     progress: Progress | None = None,
@@ -114,12 +49,21 @@ def ingest(
 ) -> Path:
     """Ingest raw recordings into one validated tactile HDF5 file; returns its path.
 
+    format: a name of :data:`~tactile_cli.ingest.registry.FORMATS` (``"events-csv"``), or
+    ``"auto"`` to tell it from the inputs. options: the format's options, as a mapping of
+    option names (``{"width_px": 640, "height_px": 480}``) or the format's options model
+    (``EventTableOptions(width_px=640, height_px=480)``); an option the format does not take
+    is an InputError naming the formats that take it. labels: added to every trial;
+    annotations, trial_labels: sidecar CSV files (see :mod:`tactile_cli.ingest.sidecars`).
+
     Nothing is written unless the whole ingest succeeds: on any error the temporary
     file is removed and an existing ``out`` is left as it was. on_note: called, once the
     file is written, with each one-line note about an assumption the readers made and the
-    file records (image folders without timestamps: the frame rate assumed).
+    file records (image folders without timestamps: the frame rate assumed; stamps a
+    mapping's policy dropped or spread).
     """
-    options = options or IngestOptions()
+    common = CommonOptions(labels=dict(labels or {}), annotations=annotations,
+                           trial_labels=trial_labels)
     progress = progress or NullProgress()
     paths = [Path(p) for p in inputs]
     if not paths:
@@ -127,39 +71,65 @@ def ingest(
     for path in paths:
         if not path.exists():
             raise missing_file_error(path)
-    fmt = detect_format(paths, options)
+    fmt = detect_format(paths, format=format, options=options)
+    fmt_options = format_options(fmt, options)
     # the sidecars are small: check them before the (possibly long) ingest of the data
     from .sidecars import apply_sidecars, read_annotations, read_trial_labels
 
-    annotations = None if options.annotations is None else read_annotations(options.annotations)
-    trial_labels = (None if options.trial_labels is None
-                    else read_trial_labels(options.trial_labels))
+    ann = None if common.annotations is None else read_annotations(common.annotations)
+    per_trial = (None if common.trial_labels is None
+                 else read_trial_labels(common.trial_labels))
     config = {
-        "format": fmt,
-        **options.as_config(),
+        "format": fmt.name,
+        "options": fmt_options.model_dump(mode="json"),
+        **common.model_dump(mode="json"),
         "compression_level": compression.level,
         "inputs": [str(p) for p in paths],
     }
     with StoreWriter(
         out, command=command, config=config, overwrite=overwrite, compression=compression
     ) as writer:
-        module_name, func_name = FORMATS[fmt].split(":")
-        reader = getattr(importlib.import_module(module_name), func_name)
-        notes = reader(paths, writer, options, progress) or []  # a reader may return notes
+        notes = fmt.read(paths, fmt_options, writer, progress)
         if not writer.trial_names:
             raise InputError("no trials found in the inputs", path=paths[0])
-        if options.labels:
+        if common.labels:
             for name in writer.trial_names:
-                writer.trial_writer(name).set_labels(**options.labels)
-        apply_sidecars(writer, annotations=annotations, labels=trial_labels)
-        for sidecar in (options.annotations, options.trial_labels):
-            if sidecar is not None:
-                writer.add_source(sidecar)
+                writer.trial_writer(name).set_labels(**common.labels)
+        apply_sidecars(writer, annotations=ann, labels=per_trial)
+        for sidecar in common.files():
+            writer.add_source(sidecar)
         written = writer.commit()
     if on_note is not None:
         for note in notes:
             on_note(note)
     return written
+
+
+def describe_recording(path: str | Path, *, format: str = AUTO,
+                       options: Mapping[str, Any] | FormatOptions | None = None
+                       ) -> RecordingSummary:
+    """What the raw recording at ``path`` holds, read without writing anything: its
+    streams (counts, rates, time spans, sizes), the trials an ingest would make and what it
+    would leave out (``tactile info RAW``). ``format`` and ``options`` as for
+    :func:`ingest`; a damaged recording is the one-line InputError an ingest would raise."""
+    path = Path(path)
+    if not path.exists():
+        raise missing_file_error(path)
+    fmt = detect_format([path], format=format, options=options)
+    return fmt.describe(path, format_options(fmt, options))
+
+
+def raw_format(path: str | Path) -> IngestFormat[Any] | None:
+    """The format the raw recording at ``path`` sniffs as, or None (a tactile HDF5 file,
+    or nothing tactile reads): what ``tactile info`` uses to pick its reader."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            if f.read(8) == b"\x89HDF\r\n\x1a\n":
+                return None
+    except OSError:
+        pass
+    return next((f for f in FORMATS.values() if f.sniff(path)), None)
 
 
 def parse_labels(pairs: Sequence[str]) -> dict[str, str | int | float]:
@@ -173,6 +143,23 @@ def parse_labels(pairs: Sequence[str]) -> dict[str, str | int | float]:
     return out
 
 
+def parse_options(pairs: Sequence[str], given: Mapping[str, Any] | None = None
+                  ) -> dict[str, Any]:
+    """Format options from ``["chunk_events=4096", ...]`` (values kept as text: the
+    format's options model converts them) added to ``given`` (options set otherwise, whose
+    ``None`` values count as not set); an option set twice is an InputError."""
+    out = {k: v for k, v in (given or {}).items() if v is not None}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise InputError(f"`options` {pair!r} must look like key=value")
+        if key in out:
+            raise InputError(f"`options` sets `{key}` a second time (`{key}` is given already)")
+        out[key] = value.strip()
+    return out
+
+
 def _number_or_text(value: str) -> str | int | float:
     for cast in (int, float):
         try:
@@ -182,4 +169,7 @@ def _number_or_text(value: str) -> str | int | float:
     return value
 
 
-__all__ = ["IngestOptions", "ingest", "detect_format", "parse_labels", "FORMATS"]
+__all__ = ["FORMATS", "CommonOptions", "FormatOptions", "IngestFormat", "RecordingSummary",
+           "StreamSummary", "TrialSummary", "describe_recording", "detect_format",
+           "format_options", "get_format", "ingest", "parse_labels", "parse_options",
+           "raw_format"]

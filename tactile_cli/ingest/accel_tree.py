@@ -47,17 +47,24 @@ speeds ``|v_slip|`` and ``|v_slide|``:
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ..config_file import os_error
+from ..config_file import os_error, read_bytes
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import StoreWriter
-from . import IngestOptions
+from .contract import (
+    FormatOptions,
+    IngestFormat,
+    RecordingSummary,
+    StreamSummary,
+    TrialSummary,
+)
 from .csv_records import first_record, record_cells
-from .mapped_csv import natural_key, read_csv_header, read_csv_table
+from .mapped_csv import path_order, read_csv_header, read_csv_table
 from .mapping import CsvDialect
 
 #: Column order of every CSV (by position).
@@ -110,7 +117,7 @@ def find_accel_csvs(root: Path) -> list[tuple[Path, str, str, str]]:
     if not found:
         raise InputError("no <object>/<orientation>/<speed>/<file>.csv found under this folder",
                          path=root)
-    return sorted(found, key=lambda f: natural_key(f[0]))
+    return sorted(found, key=lambda f: path_order(f[0]))
 
 
 def _column_role(name: str) -> str | None:
@@ -159,13 +166,21 @@ def _dialect(path: Path) -> CsvDialect:
     return CsvDialect(header=False, column_names=list(COLUMNS))
 
 
-def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                      progress: Progress, *, sample_rate_hz: float = SAMPLE_RATE_HZ) -> None:
+class AccelTreeOptions(FormatOptions):
+    """Options of the accelerometer-tree format."""
+
+    sample_rate_hz: float = SAMPLE_RATE_HZ
+    """Rate of the rows in Hz (the files hold no time column; paper 001's board: 8 kHz)."""
+
+
+def ingest_accel_tree(inputs: Sequence[Path], options: AccelTreeOptions, writer: StoreWriter,
+                      progress: Progress) -> list[str]:
     """Ingest accelerometer CSV trees (``inputs`` are root folders); one trial per CSV.
 
     Writes the streams ``accel`` (n, 6) in ``fs5g`` with the sample label ``motion`` and
-    ``velocity`` (n, 2) in m/s, both at ``sample_rate_hz`` (default 8 kHz).
+    ``velocity`` (n, 2) in m/s, both at ``options.sample_rate_hz`` (default 8 kHz).
     """
+    sample_rate_hz = options.sample_rate_hz
     if not sample_rate_hz > 0:
         raise InputError(f"`sample_rate_hz` (={sample_rate_hz}) must be positive")
     files = [f for root in inputs for f in find_accel_csvs(root)]
@@ -191,9 +206,7 @@ def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOp
         values = np.column_stack([table.columns[n] for n in names])  # (n, 8) by position
         t_s = np.arange(table.n_rows, dtype=np.float64) / sample_rate_hz
         motion = motion_class(values[:, 6], values[:, 7])
-        name = f"{obj}_{orientation}_{speed}"
-        if per_folder[path.parent] > 1:
-            name += f"_{path.stem}"
+        name = _trial_name(path, obj, orientation, speed, per_folder)
         trial = writer.trial(name, labels={"object": obj, "orientation": orientation,
                                            "speed": speed},
                              sources=[writer.add_source(path)])
@@ -203,6 +216,93 @@ def ingest_accel_tree(inputs: list[Path], writer: StoreWriter, options: IngestOp
         trial.write_signal("velocity", sensor=velocity, data=values[:, 6:], t_s=t_s)
         progress.advance(1)
     progress.finish()
+    return []
 
 
-__all__ = ["ACCEL_UNIT", "MOTION_CLASSES", "find_accel_csvs", "ingest_accel_tree", "motion_class"]
+def _trial_name(path: Path, obj: str, orientation: str, speed: str,
+                per_folder: dict[Path, int]) -> str:
+    name = f"{obj}_{orientation}_{speed}"
+    return name + f"_{path.stem}" if per_folder[path.parent] > 1 else name
+
+
+def describe_accel_tree(root: Path, options: AccelTreeOptions, fmt: IngestFormat
+                        ) -> RecordingSummary:
+    """The trials of one tree, read-only: every CSV's place and header checked as an
+    ingest does, its rows counted (not parsed: a damaged value is an ingest's to find)."""
+    files = find_accel_csvs(root)
+    per_folder: dict[Path, int] = {}
+    for path, *_ in files:
+        per_folder[path.parent] = per_folder.get(path.parent, 0) + 1
+    rate = options.sample_rate_hz
+    trials, total, size = [], 0, 0
+    for path, obj, orientation, speed in files:
+        dialect = _dialect(path)
+        _check_header(read_csv_header(path, dialect), path)
+        raw = read_bytes(path, "CSV file")
+        rows = sum(1 for line in raw.splitlines() if line.strip()) - int(dialect.header)
+        total += rows
+        size += len(raw)
+        trials.append(TrialSummary(
+            name=_trial_name(path, obj, orientation, speed, per_folder), source=str(path),
+            counts={ACCEL_SENSOR: rows, VELOCITY_SENSOR: rows},
+            duration_s=(rows - 1) / rate if rows > 1 and rate > 0 else 0.0,
+            labels={"object": obj, "orientation": orientation, "speed": speed}))
+    span = sum(t.duration_s or 0.0 for t in trials)
+    streams = [StreamSummary(name=ACCEL_SENSOR, type="accelerometer", count=total,
+                             unit="samples", channels=list(ACCEL_CHANNELS), rate_hz=rate,
+                             span_s=span, size_bytes=size, extra={"unit": ACCEL_UNIT}),
+               StreamSummary(name=VELOCITY_SENSOR, type="robot_state", count=total,
+                             unit="samples", channels=list(VELOCITY_CHANNELS), rate_hz=rate,
+                             span_s=span, extra={"unit": "m/s"})]
+    notes = [f"the rows hold no time: they are taken at {rate:g} Hz (`sample_rate_hz`)",
+             f"per-sample label motion: {MOTION_RULE}"]
+    return RecordingSummary(file=str(root), format=fmt.name, title=fmt.title, size_bytes=size,
+                            streams=streams, trials=trials, notes=notes,
+                            ingest_args=f"--format {fmt.name}")
+
+
+class AccelTreeFormat(IngestFormat[AccelTreeOptions]):
+    """The accelerometer CSV tree of paper 001 (see the module docstring)."""
+
+    name = "accel-tree"
+    title = "accelerometer CSV tree"
+    summary = ("paper 001's accelerometer CSV tree (object, orientation and speed folders; 6 "
+               "accelerations and 2 velocities per row), one trial per CSV")
+    Options = AccelTreeOptions
+
+    def sniff(self, path: Path) -> bool:
+        """A folder whose first sub-sub-subfolder (natural order) holds a CSV with the
+        8 columns of the tree, and whose root holds no CSV."""
+        try:
+            if not path.is_dir() or any(p.suffix.lower() == ".csv" for p in path.iterdir()):
+                return False
+            folder = path
+            for _ in range(3):
+                subs = sorted((p for p in folder.iterdir()
+                               if p.is_dir() and not p.name.startswith(".")),
+                              key=lambda p: path_order(p))
+                if not subs:
+                    return False
+                folder = subs[0]
+            csv = next((p for p in sorted(folder.iterdir(), key=path_order)
+                        if p.suffix.lower() == ".csv" and p.is_file()
+                        and not p.name.startswith(".")), None)
+            if csv is None:
+                return False
+            with open(csv, "rb") as f:
+                return len(record_cells(first_record(f).strip(), csv)) == len(COLUMNS)
+        except (OSError, InputError):
+            return False
+
+    def describe(self, path: Path, options: AccelTreeOptions) -> RecordingSummary:
+        return describe_accel_tree(path, options, self)
+
+    def read(self, inputs: Sequence[Path], options: AccelTreeOptions, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_accel_tree(inputs, options, writer, progress)
+
+
+ACCEL_TREE = AccelTreeFormat()
+
+__all__ = ["ACCEL_TREE", "ACCEL_UNIT", "MOTION_CLASSES", "AccelTreeFormat", "AccelTreeOptions",
+           "describe_accel_tree", "find_accel_csvs", "ingest_accel_tree", "motion_class"]

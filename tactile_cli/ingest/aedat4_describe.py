@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from .aedat4_filter import KNOWN_TYPES
+from .contract import IngestFormat, RecordingSummary, StreamSummary, TrialSummary
 
 MAGIC = b"#!AER-DAT4.0\r\n"
 
@@ -160,4 +161,33 @@ def _count(path: Path, readable: Path, streams: dict[int, Aedat4Stream],
         stream.t_last_us = hi if stream.t_last_us is None else max(stream.t_last_us, hi)
 
 
-__all__ = ["Aedat4Stream", "Aedat4Summary", "describe_aedat4", "is_aedat4"]
+def recording_summary(summary: Aedat4Summary, fmt: IngestFormat) -> RecordingSummary:
+    """The AEDAT4 summary in the shape every format's ``describe`` returns (the AEDAT4
+    fields ``stream_id``, ``type_identifier``, ``camera``, ``t_first_us`` and ``t_last_us``
+    kept beside the common ones)."""
+    streams, dropped = [], []
+    for s in summary.streams:
+        streams.append(StreamSummary(
+            name=s.name, type=s.type, count=s.count, unit=s.unit, readable=s.readable,
+            t_first_s=None if s.t_first_us is None else s.t_first_us * 1e-6,
+            t_last_s=None if s.t_last_us is None else s.t_last_us * 1e-6, span_s=s.span_s,
+            width_px=s.width_px, height_px=s.height_px,
+            extra={"stream_id": s.stream_id, "type_identifier": s.type_identifier,
+                   "camera": s.camera, "t_first_us": s.t_first_us, "t_last_us": s.t_last_us}))
+        if not s.readable:
+            dropped.append(f"stream {s.stream_id} {s.name!r} of type {s.type_identifier!r}: the "
+                           "decoder does not read it; an ingest refuses the file unless "
+                           "`skip_unknown=True` leaves it out")
+    readable = [s for s in summary.streams if s.readable]
+    spans = [s.span_s for s in readable if s.span_s is not None]
+    path = Path(summary.file)
+    trial = TrialSummary(name=path.stem, source=summary.file,
+                         counts={s.name: int(s.count or 0) for s in readable},
+                         duration_s=max(spans) if spans else None)
+    return RecordingSummary(file=summary.file, format=fmt.name, title=fmt.title,
+                            size_bytes=summary.size_bytes, streams=streams, trials=[trial],
+                            dropped=dropped)
+
+
+__all__ = ["Aedat4Stream", "Aedat4Summary", "describe_aedat4", "is_aedat4",
+           "recording_summary"]

@@ -24,7 +24,7 @@ input file (named after the file stem) holds every stream of the file:
   with neither events, frames nor IMU samples (triggers alone, or only unknown stream
   types) is refused naming the streams found.
 
-Packets are gathered into chunks of ``IngestOptions.chunk_events`` events before they are
+Packets are gathered into chunks of ``Aedat4Options.chunk_events`` events before they are
 checked and appended, so memory stays bounded (frames are appended one by one; IMU samples
 and triggers, a few kB per second, are held until the file ends). Progress counts bytes.
 """
@@ -37,19 +37,17 @@ import struct
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO
 
-import aedat
 import numpy as np
 
 from ..errors import InputError
 from ..progress import Progress
 from ..store.writer import EventAppender, StoreWriter, TrialWriter, safe_name
-from . import IngestOptions
 from .aedat4_filter import (
     KNOWN_TYPES,
     copy_without_streams,
@@ -58,9 +56,26 @@ from .aedat4_filter import (
     unknown_streams,
 )
 from .aedat4_streams import FrameCollector, ImuCollector, TriggerCollector
+from .contract import FormatOptions, IngestFormat, RecordingSummary
 from .events_table import DEFAULT_SENSOR, event_sensor
 
 MAGIC = b"#!AER-DAT4.0\r\n"
+
+
+class Aedat4Options(FormatOptions):
+    """Options of the AEDAT4 format."""
+
+    width_px: int | None = None
+    """Event sensor width in px: checked against the file's own (which is used)."""
+    height_px: int | None = None
+    """Event sensor height in px: checked against the file's own (which is used)."""
+    sensor_name: str | None = None
+    """Name of the event sensor (default: the camera, e.g. ``DVXplorer_DXB00010``)."""
+    chunk_events: int = 1 << 20
+    """Events gathered before one check and append (memory stays bounded by it)."""
+    skip_unknown: bool = False
+    """Leave out streams of a type the decoder does not read (poses, bounding boxes, ...),
+    with a note; without it such a file is refused."""
 
 
 @dataclass(frozen=True)
@@ -78,7 +93,7 @@ class StreamInfo:
         return self.attrs.get("source")
 
 
-def ingest_aedat4(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
+def ingest_aedat4(inputs: Sequence[Path], options: Aedat4Options, writer: StoreWriter,
                   progress: Progress) -> list[str]:
     """Add one trial per AEDAT4 file with all its streams; returns one note per stream
     skipped (``options.skip_unknown``)."""
@@ -104,7 +119,7 @@ def read_streams(path: Path) -> dict[int, StreamInfo]:
     return streams
 
 
-def _ingest_file(path: Path, writer: StoreWriter, options: IngestOptions,
+def _ingest_file(path: Path, writer: StoreWriter, options: Aedat4Options,
                  progress: Progress) -> list[str]:
     check_layout(path)
     types = stream_types(path)
@@ -138,7 +153,7 @@ def _stream_kinds(streams: dict[int, StreamInfo]) -> str:
 
 
 def _event_stream(path: Path, streams: dict[int, StreamInfo],
-                  options: IngestOptions) -> tuple[StreamInfo, int, int] | None:
+                  options: Aedat4Options) -> tuple[StreamInfo, int, int] | None:
     """The file's one event stream and its sensor size (width, height) in px; None when
     the file has no event stream."""
     event_streams = [s for s in streams.values() if s.type == "events"]
@@ -164,7 +179,7 @@ def _event_stream(path: Path, streams: dict[int, StreamInfo],
     return stream, width, height
 
 
-def _ingest_streams(path: Path, readable: Path, writer: StoreWriter, options: IngestOptions,
+def _ingest_streams(path: Path, readable: Path, writer: StoreWriter, options: Aedat4Options,
                     progress: Progress) -> None:
     """Ingest ``path`` (as named in messages and sources) by decoding ``readable`` (the
     file itself, or its copy without unknown streams)."""
@@ -237,7 +252,7 @@ def _write_imus(writer: StoreWriter, trial: TrialWriter, imus: dict[int, ImuColl
 
 
 def _ingest_without_events(path: Path, readable: Path, streams: dict[int, StreamInfo],
-                           writer: StoreWriter, options: IngestOptions,
+                           writer: StoreWriter, options: Aedat4Options,
                            progress: Progress) -> None:
     """A trial from a file without an event stream: its frames, IMU samples and triggers,
     time 0 at the earliest of their timestamps (trial attribute ``t_origin_us``)."""
@@ -395,6 +410,8 @@ def _stderr_to_nothing() -> Iterator[None]:
 
 def _open(readable: Path, path: Path | None = None) -> Any:
     """A decoder of ``readable``; its refusal is an InputError naming ``path``."""
+    import aedat  # the Rust decoder, imported when a file is read (not by `tactile --help`)
+
     path = readable if path is None else path
     try:
         with _stderr_to_nothing():
@@ -600,4 +617,36 @@ def _header_attributes(path: Path) -> dict[int, dict[str, str]]:
     return out
 
 
-__all__ = ["ingest_aedat4", "read_streams", "check_layout", "StreamInfo"]
+class Aedat4Format(IngestFormat[Aedat4Options]):
+    """AEDAT4 recordings of iniVation cameras, one trial per file (see the module docstring)."""
+
+    name = "aedat4"
+    title = "AEDAT4"
+    summary = ("AEDAT4 files of iniVation cameras (DVXplorer, DAVIS): events, APS frames, IMU "
+               "samples and triggers, one trial per file")
+    suffixes = (".aedat4",)
+    Options = Aedat4Options
+
+    def sniff(self, path: Path) -> bool:
+        if path.suffix.lower() == ".aedat4":
+            return not path.is_dir()
+        try:
+            with open(path, "rb") as f:
+                return f.read(len(MAGIC)) == MAGIC
+        except OSError:
+            return False
+
+    def describe(self, path: Path, options: Aedat4Options) -> RecordingSummary:
+        from .aedat4_describe import describe_aedat4, recording_summary
+
+        return recording_summary(describe_aedat4(path), self)
+
+    def read(self, inputs: Sequence[Path], options: Aedat4Options, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_aedat4(inputs, options, writer, progress)
+
+
+AEDAT4 = Aedat4Format()
+
+__all__ = ["AEDAT4", "Aedat4Format", "Aedat4Options", "ingest_aedat4", "read_streams",
+           "check_layout", "StreamInfo"]

@@ -46,7 +46,7 @@ import re
 import threading
 import tokenize
 from collections import deque
-from collections.abc import Generator, Iterator
+from collections.abc import Generator, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -57,13 +57,19 @@ import numpy as np
 from ..config_file import decode_utf8
 from ..errors import InputError
 from ..progress import Progress
-from ..store.writer import StoreWriter, TrialWriter, safe_name
-from . import IngestOptions
+from ..store.writer import StoreWriter, TrialWriter, event_time_origin_us, safe_name
+from .contract import (
+    FormatOptions,
+    IngestFormat,
+    RecordingSummary,
+    StreamSummary,
+    TrialSummary,
+)
 
 COLUMNS = ("t", "x", "y", "p")
 DEFAULT_SENSOR = "event_camera"
 
-#: CSV bytes parsed per block for each event of ``IngestOptions.chunk_events`` (a
+#: CSV bytes parsed per block for each event of ``EventTableOptions.chunk_events`` (a
 #: ``t,x,y,p`` line with absolute microsecond times is about 26 bytes) ...
 _CSV_BYTES_PER_EVENT = 26
 #: ... up to this many: larger blocks are slower, not faster (fresh multi-MiB buffers
@@ -78,6 +84,21 @@ _BLOCKS_AHEAD = 3
 _POOL: ThreadPoolExecutor | None = None
 _POOL_PID = 0
 _POOL_LOCK = threading.Lock()
+#: Magic bytes every .npy file starts with.
+NPY_MAGIC = b"\x93NUMPY"
+
+
+class EventTableOptions(FormatOptions):
+    """Options of the event CSV and NPY formats."""
+
+    width_px: int | None = None
+    """Event sensor width in px (required: event tables do not record it)."""
+    height_px: int | None = None
+    """Event sensor height in px (required: event tables do not record it)."""
+    sensor_name: str | None = None
+    """Name of the event-camera sensor (default ``event_camera``)."""
+    chunk_events: int = 1 << 20
+    """Events read per block while streaming (memory stays bounded by it)."""
 
 
 # -- shared by the event readers ------------------------------------------------------------
@@ -108,15 +129,17 @@ def link_source(trial: TrialWriter, hashing: Future[int]) -> None:
     trial.set_sources([hashing.result()])
 
 
-def sensor_size(options: IngestOptions, what: str, path: Path | None = None) -> tuple[int, int]:
+def sensor_size(options: EventTableOptions | FormatOptions, what: str,
+                path: Path | None = None) -> tuple[int, int]:
     """(width, height) in px from ``--width``/``--height``, which ``what`` files lack."""
-    if options.width_px is None or options.height_px is None:
+    width_px, height_px = getattr(options, "width_px", None), getattr(options, "height_px", None)
+    if width_px is None or height_px is None:
         raise InputError(f"{what} files do not record the sensor size; pass `width_px` and "
                          "`height_px` (pixels), e.g. `width_px=320` `height_px=240`", path=path)
-    for flag, value in (("`width_px`", options.width_px), ("`height_px`", options.height_px)):
+    for flag, value in (("`width_px`", width_px), ("`height_px`", height_px)):
         if value < 1 or value > 65536:
             raise InputError(f"{flag} (={value}) must be between 1 and 65536 px")
-    return int(options.width_px), int(options.height_px)
+    return int(width_px), int(height_px)
 
 
 @dataclass
@@ -167,8 +190,8 @@ class PolarityConvention:
 
 
 # -- CSV ------------------------------------------------------------------------------------
-def ingest_events_csv(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                      progress: Progress) -> None:
+def ingest_events_csv(inputs: Sequence[Path], options: EventTableOptions, writer: StoreWriter,
+                      progress: Progress) -> list[str]:
     """Add one trial per CSV file of events (columns t, x, y, p; see the module docstring)."""
     width, height = sensor_size(options, "event CSV", inputs[0])
     sensor = event_sensor(writer, options.sensor_name or DEFAULT_SENSOR, width_px=width,
@@ -190,6 +213,7 @@ def ingest_events_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
             raise InputError("no events after the header", path=path, where="line 2")
         link_source(trial, hashing)
     progress.finish()
+    return []
 
 
 def read_csv_blocks(path: Path, *, block_bytes: int = _CSV_BLOCK_BYTES
@@ -264,6 +288,9 @@ def _read_header(f: io.BufferedReader, path: Path) -> list[str]:
     extra = [c for c in names if c not in COLUMNS]
     if missing:
         hint = "" if set(names) & set(COLUMNS) else " (the first line must be a header: t,x,y,p)"
+        if not set(names) & {"x", "y", "p"}:  # not an event table at all
+            hint += ("; a CSV of another sensor is read with a mapping (`mapping='FILE.yaml'`, "
+                     "see configs/mapping_example.yaml)")
         raise InputError(f"missing column{'s' if len(missing) > 1 else ''} "
                          f"{', '.join(map(repr, missing))}; the header names {names}{hint}",
                          path=path, where="line 1")
@@ -356,39 +383,51 @@ def _raise_first_bad_line(block: bytes, names: list[str], path: Path, first_line
 
 
 # -- NPY ------------------------------------------------------------------------------------
-def ingest_events_npy(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                      progress: Progress) -> None:
+def ingest_events_npy(inputs: Sequence[Path], options: EventTableOptions, writer: StoreWriter,
+                      progress: Progress) -> list[str]:
     """Add one trial per .npy structured array of events (fields t, x, y, p)."""
     width, height = sensor_size(options, "event NPY", inputs[0])
     sensor = event_sensor(writer, options.sensor_name or DEFAULT_SENSOR, width_px=width,
                           height_px=height, description="events from NPY (t us, x px, y px, p)")
     progress.start(sum(_regular_file(p).stat().st_size for p in inputs), "events NPY")
     for path in inputs:
-        dtype, n, offset = _npy_layout(path)
+        _npy_layout(path)  # refused before the trial is started
         hashing = _parse_pool().submit(writer.add_source, path)
         trial = writer.trial(path.stem)
         events = trial.events(sensor)
-        polarity = PolarityConvention()
-        chunk = max(1, options.chunk_events)
-        buffer = np.empty(min(chunk, n), dtype=dtype)
-        with open(path, "rb") as f:
-            f.seek(offset)
-            for start in range(0, n, chunk):
-                block = buffer[:min(chunk, n - start)]
-                got = f.readinto(block.view(np.uint8))
-                if got != block.nbytes:
-                    raise InputError(f"file is truncated: its header announces {n} events, the "
-                                     f"data end inside event {start + got // dtype.itemsize}",
-                                     path=path)
-                p = polarity.to_pm1(block["p"].astype(np.int8) if block["p"].dtype == bool
-                                    else block["p"], path=path, first_row=start, row_label="index")
-                events.append(block["x"], block["y"], block["t"], p, source=path,
-                              first_row=start, row_label="index")
-                progress.advance(block.nbytes)
+        for start, block, p in read_npy_blocks(path, chunk_events=options.chunk_events):
+            events.append(block["x"], block["y"], block["t"], p, source=path,
+                          first_row=start, row_label="index")
+            progress.advance(block.nbytes)
         if events.close() == 0:
             raise InputError("the array holds no events", path=path)
         link_source(trial, hashing)
     progress.finish()
+    return []
+
+
+def read_npy_blocks(path: Path, *, chunk_events: int = 1 << 20
+                    ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """Read an event .npy file block by block: yields ``(first index, block, p)``, the
+    block a structured array of at most ``chunk_events`` events (a view of one reused
+    buffer) and p its (n,) int8 polarity as -1/+1. Raises InputError for a damaged or cut
+    file and for a polarity outside the file's convention."""
+    dtype, n, offset = _npy_layout(path)
+    polarity = PolarityConvention()
+    chunk = max(1, chunk_events)
+    buffer = np.empty(min(chunk, n), dtype=dtype)
+    with open(path, "rb") as f:
+        f.seek(offset)
+        for start in range(0, n, chunk):
+            block = buffer[:min(chunk, n - start)]
+            got = f.readinto(block.view(np.uint8))
+            if got != block.nbytes:
+                raise InputError(f"file is truncated: its header announces {n} events, the "
+                                 f"data end inside event {start + got // dtype.itemsize}",
+                                 path=path)
+            p = polarity.to_pm1(block["p"].astype(np.int8) if block["p"].dtype == bool
+                                else block["p"], path=path, first_row=start, row_label="index")
+            yield start, block, p
 
 
 def _npy_layout(path: Path) -> tuple[np.dtype, int, int]:
@@ -444,5 +483,144 @@ def _regular_file(path: Path) -> Path:
     return path
 
 
-__all__ = ["ingest_events_csv", "ingest_events_npy", "read_csv_blocks", "event_sensor",
-           "sensor_size", "PolarityConvention"]
+# -- describe and the two formats ----------------------------------------------------------
+@dataclass
+class _EventTally:
+    """Counts, time range and pixel range of one event table, block by block."""
+
+    n: int = 0
+    t_first: int | None = None
+    t_last: int | None = None
+    t_max: int | None = None
+    out_of_order: int = 0
+    x_range: tuple[int, int] | None = None
+    y_range: tuple[int, int] | None = None
+
+    def add(self, t: np.ndarray, x: np.ndarray, y: np.ndarray) -> None:
+        if not len(t):
+            return
+        t = np.asarray(t, dtype=np.int64)
+        latest = np.maximum.accumulate(t)
+        before = np.concatenate(([self.t_max if self.t_max is not None else t[0]],
+                                 latest[:-1]))
+        self.out_of_order += int(np.count_nonzero(t < before))
+        self.n += len(t)
+        self.t_first = int(t[0]) if self.t_first is None else self.t_first
+        self.t_last = int(t[-1])
+        self.t_max = int(latest[-1]) if self.t_max is None else max(self.t_max, int(latest[-1]))
+        for name, values in (("x_range", x), ("y_range", y)):
+            lo, hi = int(np.min(values)), int(np.max(values))
+            have = getattr(self, name)
+            setattr(self, name, (lo, hi) if have is None else (min(have[0], lo), max(have[1], hi)))
+
+
+def _describe_events(path: Path, fmt: IngestFormat, options: EventTableOptions,
+                     tally: _EventTally) -> RecordingSummary:
+    """The summary of one event table once every block was tallied."""
+    notes: list[str] = []
+    span_s = None
+    if tally.t_first is not None and tally.t_last is not None and tally.t_max is not None:
+        span_s = (tally.t_max - tally.t_first) * 1e-6
+    stream = StreamSummary(
+        name="events", type="events", count=tally.n, unit="events",
+        t_first_s=None if tally.t_first is None else tally.t_first * 1e-6,
+        t_last_s=None if tally.t_last is None else tally.t_last * 1e-6, span_s=span_s,
+        size_bytes=path.stat().st_size, width_px=options.width_px, height_px=options.height_px,
+        out_of_order_stamps=tally.out_of_order,
+        extra={"t_first_us": tally.t_first, "t_last_us": tally.t_last,
+               "x_range": list(tally.x_range) if tally.x_range else None,
+               "y_range": list(tally.y_range) if tally.y_range else None,
+               "events_per_s": tally.n / span_s if span_s else None})
+    if tally.n == 0:
+        notes.append("the table holds no events: an ingest refuses it")
+    if tally.out_of_order:
+        notes.append(f"{tally.out_of_order:,} events are earlier than an event before them: an "
+                     "ingest refuses the file (events must be in time order)")
+    if tally.x_range and tally.y_range:
+        need_w, need_h = tally.x_range[1] + 1, tally.y_range[1] + 1
+        if options.width_px is None or options.height_px is None:
+            notes.append(f"the table does not record the sensor size; its pixels need at least "
+                         f"`width_px={need_w}` `height_px={need_h}`")
+        elif tally.x_range[0] < 0 or tally.y_range[0] < 0 or need_w > options.width_px \
+                or need_h > options.height_px:
+            notes.append(f"pixels x {tally.x_range[0]}..{tally.x_range[1]}, y "
+                         f"{tally.y_range[0]}..{tally.y_range[1]} fall outside a "
+                         f"{options.width_px}x{options.height_px} px sensor: an ingest refuses "
+                         "the file")
+    if tally.t_first is not None:
+        origin = event_time_origin_us(tally.t_first)
+        notes.append(f"trial time 0 is {origin} us "
+                     f"({'relative times' if origin == 0 else 'the first event'})")
+    size = (f"--width {options.width_px} --height {options.height_px}"
+            if options.width_px is not None and options.height_px is not None
+            else "--width WIDTH --height HEIGHT")
+    trial = TrialSummary(name=path.stem, source=str(path), counts={"events": tally.n},
+                         duration_s=span_s)
+    return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title,
+                            size_bytes=path.stat().st_size, streams=[stream], trials=[trial],
+                            notes=notes, ingest_args=size)
+
+
+class EventCsvFormat(IngestFormat[EventTableOptions]):
+    """CSV files of events, one per trial (see the module docstring)."""
+
+    name = "events-csv"
+    title = "event CSV"
+    summary = "CSV files of events with the header t,x,y,p (t in us), one trial per file"
+    suffixes = (".csv",)
+    Options = EventTableOptions
+
+    def sniff(self, path: Path) -> bool:
+        return path.suffix.lower() == ".csv" and not path.is_dir()
+
+    def describe(self, path: Path, options: EventTableOptions) -> RecordingSummary:
+        _regular_file(path)
+        tally = _EventTally()
+        polarity = PolarityConvention()
+        for first_line, table, _ in read_csv_blocks(path):
+            polarity.to_pm1(table["p"], path=path, first_row=first_line, row_label="line")
+            tally.add(table["t"], table["x"], table["y"])
+        summary = _describe_events(path, self, options, tally)
+        summary.streams[0].extra["polarity"] = polarity.name
+        return summary
+
+    def read(self, inputs: Sequence[Path], options: EventTableOptions, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_events_csv(inputs, options, writer, progress)
+
+
+class EventNpyFormat(IngestFormat[EventTableOptions]):
+    """NumPy structured arrays of events, one per trial (see the module docstring)."""
+
+    name = "events-npy"
+    title = "event NPY"
+    summary = "NumPy .npy structured arrays of events (fields t, x, y, p), one trial per file"
+    suffixes = (".npy",)
+    Options = EventTableOptions
+
+    def sniff(self, path: Path) -> bool:
+        if path.suffix.lower() == ".npy":
+            return not path.is_dir()
+        try:
+            with open(path, "rb") as f:
+                return f.read(len(NPY_MAGIC)) == NPY_MAGIC
+        except OSError:
+            return False
+
+    def describe(self, path: Path, options: EventTableOptions) -> RecordingSummary:
+        tally = _EventTally()
+        for _, block, _ in read_npy_blocks(path, chunk_events=options.chunk_events):
+            tally.add(block["t"], block["x"], block["y"])
+        return _describe_events(path, self, options, tally)
+
+    def read(self, inputs: Sequence[Path], options: EventTableOptions, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_events_npy(inputs, options, writer, progress)
+
+
+EVENTS_CSV = EventCsvFormat()
+EVENTS_NPY = EventNpyFormat()
+
+__all__ = ["EVENTS_CSV", "EVENTS_NPY", "EventCsvFormat", "EventNpyFormat", "EventTableOptions",
+           "ingest_events_csv", "ingest_events_npy", "read_csv_blocks", "read_npy_blocks",
+           "event_sensor", "sensor_size", "PolarityConvention"]

@@ -57,21 +57,29 @@ order, then its reference, then its ``timestamps.csv`` if any).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
 
 from ..config_file import read_text
 from ..errors import InputError
+from ..natural import natural_key
 from ..progress import Progress
 from ..store.writer import StoreWriter
-from . import IMAGE_SUFFIXES, IngestOptions
+from .contract import (
+    FormatOptions,
+    IngestFormat,
+    RecordingSummary,
+    StreamSummary,
+    TrialSummary,
+)
 from .csv_records import csv_records
+from .stamps import interval_jitter_s, stamp_stats
 
+#: Suffixes of the frames read (lower case).
+IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg"}
 #: Frame rate assumed when a folder has no timestamps.csv: DIGIT's 30 Hz (paper 002).
 DEFAULT_FRAME_RATE_HZ = 30.0
 #: Names (without suffix, any letter case) of the no-contact reference frame.
@@ -89,7 +97,6 @@ UNSUPPORTED_IMAGE_SUFFIXES = {".bmp", ".tif", ".tiff", ".gif", ".webp"}
 #: Target bytes of decoded frames held before one write to HDF5.
 FRAME_BATCH_BYTES = 8 << 20
 
-_DIGITS = re.compile(r"([0-9]+)")
 _REFERENCE_HINT = ("name it reference.png (accepted names: "
                    + ", ".join(REFERENCE_STEMS) + " with suffix .png, .jpg or .jpeg), or "
                    "pass `reference='first'` (the first frame is the no-contact one) or "
@@ -122,12 +129,25 @@ class ImageFolder:
         return self.folder.resolve().name
 
 
-def natural_key(name: str) -> tuple[tuple[str | int, ...], str]:
-    """Sort key putting ``frame_2`` before ``frame_10``: digit runs compare as numbers,
-    the rest case-insensitively; the exact name breaks ties (``f01`` vs ``f1``)."""
-    parts = _DIGITS.split(name.casefold())
-    # re.split with one group alternates text (even) and digits (odd), so types line up
-    return tuple(int(p) if i % 2 else p for i, p in enumerate(parts)), name
+class ImageFolderOptions(FormatOptions):
+    """Options of the image-folder format."""
+
+    sensor_name: str | None = None
+    """Name of the visuotactile sensor (default ``visuotactile``)."""
+    width_px: int | None = None
+    """Frame width in px: checked against the frames (which set it)."""
+    height_px: int | None = None
+    """Frame height in px: checked against the frames (which set it)."""
+    frame_rate_hz: float | None = None
+    """Frame rate of folders without a timestamps.csv (default: 30 Hz assumed, with a
+    note)."""
+    reference: str | None = None
+    """The no-contact reference frame of every folder: ``first`` (the first frame in
+    natural order, kept as frame 0) or a file name or stem in each folder (default: the file
+    named reference, ref, background or no_contact)."""
+    px_per_mm: float | None = None
+    """Pixels per millimetre on the gel (DIGIT-like: 16), stored as the sensor attribute
+    ``px_per_mm`` that calibration and height maps read."""
 
 
 def has_image_files(folder: Path) -> bool:
@@ -405,6 +425,8 @@ def load_rgb(path: Path) -> np.ndarray:
 
     Raises :class:`InputError` naming the file when it is not a readable 8-bit image.
     """
+    from PIL import Image, UnidentifiedImageError  # imported when frames are decoded
+
     try:
         with Image.open(path) as im:
             if im.mode == "F" or im.mode.startswith("I"):
@@ -443,8 +465,8 @@ def nominal_frame_rate_hz(folders: Sequence[ImageFolder]) -> float:
     return round(float(1.0 / np.median(intervals)), 6)
 
 
-def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                          progress: Progress) -> list[str]:
+def ingest_image_sequence(inputs: Sequence[Path], options: ImageFolderOptions,
+                          writer: StoreWriter, progress: Progress) -> list[str]:
     """Add one visuotactile sensor and one trial per input folder to ``writer``.
 
     The sensor is named ``options.sensor_name`` (default ``visuotactile``); its size
@@ -454,16 +476,11 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
     user: one line when frame times were assumed (folders without ``timestamps.csv`` and no
     ``frame_rate_hz``), naming the rate and how to give the real one.
     """
-    # a folder with neither frames nor sequence folders is scanned as it is, for its error
-    trial_folders = [f for p in inputs for f in ((image_sequence_folders(p) or [p])
-                                                 if p.is_dir() else [p])]
-    px_per_mm = getattr(options, "px_per_mm", None)
+    px_per_mm = options.px_per_mm
     if px_per_mm is not None and not (np.isfinite(px_per_mm) and px_per_mm > 0):
         raise InputError(f"`px_per_mm` (={px_per_mm}) must be a positive number of pixels per "
                          "millimetre")
-    folders = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz,
-                                 reference_name=getattr(options, "reference", None))
-               for p in trial_folders]
+    folders = scan_inputs(inputs, options)
     first_ref = folders[0].reference
     reference0 = load_rgb(first_ref)
     size_hw = (int(reference0.shape[0]), int(reference0.shape[1]))
@@ -483,6 +500,16 @@ def ingest_image_sequence(inputs: list[Path], writer: StoreWriter, options: Inge
         _write_trial(folder, writer, sensor, size_hw, first_ref, progress)
     progress.finish()
     return assumed_rate_notes(folders)
+
+
+def scan_inputs(inputs: Sequence[Path], options: ImageFolderOptions) -> list[ImageFolder]:
+    """Every trial folder of the inputs, scanned (:func:`scan_image_folder`); an input
+    folder that holds image-sequence folders stands for them."""
+    # a folder with neither frames nor sequence folders is scanned as it is, for its error
+    trial_folders = [f for p in inputs for f in ((image_sequence_folders(p) or [p])
+                                                 if p.is_dir() else [p])]
+    return [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz,
+                              reference_name=options.reference) for p in trial_folders]
 
 
 def assumed_rate_notes(folders: Sequence[ImageFolder]) -> list[str]:
@@ -544,10 +571,90 @@ def _write_trial(folder: ImageFolder, writer: StoreWriter, sensor: str, size_hw:
     trial.set_sources(sources)
 
 
+def describe_image_folders(path: Path, options: ImageFolderOptions,
+                           fmt: IngestFormat) -> RecordingSummary:
+    """The trials of an image-sequence folder (or a folder of them), read-only: the layout,
+    reference, timestamps and labels checked as an ingest does; the frame size read from
+    the first reference's header (no frame is decoded)."""
+    from PIL import Image
+
+    folders = scan_inputs([path], options)
+    width = height = None
+    try:
+        with Image.open(folders[0].reference) as im:
+            width, height = im.size
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError):
+        pass  # the ingest names a frame it cannot decode; the summary leaves the size out
+    trials, intervals, size = [], [], 0
+    for f in folders:
+        files = [*f.frames, f.reference]
+        size += sum(p.stat().st_size for p in files)
+        trials.append(TrialSummary(
+            name=f.trial_name, source=str(f.folder), counts={"frames": len(f.frames)},
+            duration_s=float(f.t_s[-1] - f.t_s[0]) if len(f.t_s) else None,
+            labels=dict(f.labels)))
+        intervals.append(f.t_s)
+    stats = [stamp_stats(t) for t in intervals]
+    steps = np.concatenate([np.diff(t) for t in intervals])
+    positive = steps[steps > 0]
+    stream = StreamSummary(
+        name="frames", type="frames", count=sum(len(f.frames) for f in folders), unit="frames",
+        rate_hz=float(1.0 / np.median(positive)) if len(positive) else None,
+        jitter_s=interval_jitter_s(steps),
+        t_first_s=float(folders[0].t_s[0]) if len(folders) == 1 else None,
+        t_last_s=float(folders[0].t_s[-1]) if len(folders) == 1 else None,
+        span_s=sum(t.duration_s or 0.0 for t in trials), size_bytes=size, width_px=width,
+        height_px=height, repeated_stamps=sum(st.n_repeated for st in stats),
+        out_of_order_stamps=sum(st.n_out_of_order for st in stats),
+        extra={"references": sorted({f.reference.name for f in folders}, key=natural_key),
+               "timestamps_files": sum(f.timestamps_file is not None for f in folders)})
+    notes = assumed_rate_notes(folders)
+    if options.px_per_mm is None:
+        notes.append("no `px_per_mm`: the visuotactile calibration and height maps need the "
+                     "gel's scale (pixels per millimetre; DIGIT-like: 16)")
+    return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title, size_bytes=size,
+                            streams=[stream], trials=trials, notes=notes)
+
+
+class ImageFolderFormat(IngestFormat[ImageFolderOptions]):
+    """Image-sequence folders of visuotactile sensors (see the module docstring)."""
+
+    name = "images"
+    title = "image-sequence folder"
+    summary = ("folders of PNG/JPG frames with a no-contact reference frame (DIGIT, "
+               "GelSight), or a folder of such folders; one trial per folder")
+    Options = ImageFolderOptions
+
+    def sniff(self, path: Path) -> bool:
+        """A folder with PNG/JPG frames in it or in one of its subfolders."""
+        try:
+            if not path.is_dir():
+                return False
+            return has_image_files(path) or any(
+                p.is_dir() and not p.name.startswith(".") and has_image_files(p)
+                for p in path.iterdir())
+        except OSError:
+            return False
+
+    def describe(self, path: Path, options: ImageFolderOptions) -> RecordingSummary:
+        return describe_image_folders(path, options, self)
+
+    def read(self, inputs: Sequence[Path], options: ImageFolderOptions, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_image_sequence(inputs, options, writer, progress)
+
+
+IMAGES = ImageFolderFormat()
+
 __all__ = [
     "DEFAULT_FRAME_RATE_HZ",
+    "IMAGES",
+    "IMAGE_SUFFIXES",
     "FrameTimes",
+    "ImageFolderFormat",
+    "ImageFolderOptions",
     "assumed_rate_notes",
+    "describe_image_folders",
     "has_image_files",
     "image_sequence_folders",
     "REFERENCE_STEMS",
@@ -558,8 +665,8 @@ __all__ = [
     "ImageFolder",
     "ingest_image_sequence",
     "load_rgb",
-    "natural_key",
     "nominal_frame_rate_hz",
     "read_timestamps",
     "scan_image_folder",
+    "scan_inputs",
 ]

@@ -27,19 +27,19 @@ import csv
 import fnmatch
 import io
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from ..config_file import decode_utf8, os_error, read_bytes
 from ..errors import InputError
+from ..natural import natural_key
 from ..progress import Progress
 from ..store.writer import StoreWriter, safe_name
-from . import IngestOptions
+from .contract import FormatOptions, IngestFormat, RecordingSummary
 from .csv_records import QUOTE_BYTE, csv_records, first_record, record_cells
 from .mapping import (
     ROW_FIELD,
@@ -50,13 +50,16 @@ from .mapping import (
     load_mapping,
     render,
 )
+from .stamps import SettledStamps, StampError, settle_stamps, stamp_stats
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Text values parsed as NaN (then refused as non-finite, with their line and column).
 NAN_TOKENS = ("nan", "NaN", "NAN", "-nan", "-NaN", "-NAN")
 #: Header names listed in a "column not found" message.
 MAX_NAMES_SHOWN = 12
 
-_DIGITS = re.compile(r"([0-9]+)")
 #: Key of a ``layout: rows`` table in a trial's files (no stream template is empty).
 TABLE = ""
 #: Nominal rate of one-sample streams (``rows_are: trials``): the schema wants a rate > 0.
@@ -287,6 +290,8 @@ def _parse_columns(body: io.BytesIO | io.StringIO, path: Path, dialect: CsvDiale
         on_bad_lines="error", skip_blank_lines=False)
     if encoding is not None:
         read_kwargs["encoding"] = encoding
+    import pandas as pd  # imported on first use: `tactile --help` does not load it
+
     try:
         frame = pd.read_csv(body, dtype=dtypes, na_values=list(NAN_TOKENS), **read_kwargs)
     except ValueError as exc:
@@ -334,6 +339,8 @@ def _no_trailing_delimiter_error(path: Path, line: int) -> InputError:
 def _to_float(cells: np.ndarray) -> tuple[np.ndarray, int | None]:
     """(n,) text cells as float64 (NaN tokens as NaN) and the index of the first cell that
     is not a number (None when all are)."""
+    import pandas as pd
+
     text = cells.astype(str)
     values = pd.to_numeric(pd.Series(text), errors="coerce").to_numpy(dtype=np.float64)
     bad = np.flatnonzero(np.isnan(values) & ~np.isin(text, NAN_TOKENS))
@@ -367,9 +374,11 @@ def _shown(names: Sequence[str]) -> str:
     return head + (f", ... ({len(names)} in all)" if len(names) > MAX_NAMES_SHOWN else "")
 
 
-def natural_key(path: Path) -> list[object]:
-    """Sort key that puts ``mat2`` before ``mat10``."""
-    return [int(p) if p.isdigit() else p for p in _DIGITS.split(path.as_posix())]
+def path_order(path: Path) -> tuple[Any, ...]:
+    """Sort key of trial paths: :func:`~tactile_cli.natural.natural_key` of the whole path
+    (``mat2`` before ``mat10``, letter case ignored, so folders sort before their
+    neighbours' files as they do by name)."""
+    return natural_key(path.as_posix())
 
 
 # -- plan ------------------------------------------------------------------------------------
@@ -436,14 +445,14 @@ def _find_trial_paths(inp: Path, mapping: CsvMapping) -> list[Path]:
     if layout.layout in ("file", "rows"):
         if inp.is_file():
             return [inp]
-        found = sorted((p for p in inp.glob(layout.glob) if p.is_file()), key=natural_key)
+        found = sorted((p for p in inp.glob(layout.glob) if p.is_file()), key=path_order)
         if not found:
             raise InputError(f"no file matches `trials.glob` {layout.glob!r} here", path=inp)
         return found
     if not inp.is_dir():
         raise InputError("the mapping's trials are folders (`layout: folder`); give folders",
                          path=inp)
-    found = sorted((p for p in inp.glob(layout.glob) if p.is_dir()), key=natural_key)
+    found = sorted((p for p in inp.glob(layout.glob) if p.is_dir()), key=path_order)
     if found:
         return found
     first = mapping.streams[0].file
@@ -541,6 +550,15 @@ def unit_of(s: Stream, channel: str, mapping_path: Path) -> str:
 
 
 # -- read and write --------------------------------------------------------------------------
+class MappedCsvOptions(FormatOptions):
+    """Options of the mapped-CSV format."""
+
+    mapping: Path | None = None
+    """The YAML mapping file that says which files are trials and which columns are time,
+    channels and labels (see configs/mapping_example.yaml); required to ingest, optional to
+    describe (without one, ``tactile info`` lists the CSV columns)."""
+
+
 @dataclass
 class _StreamData:
     data: np.ndarray  # (n, c) float64 in the channel units
@@ -548,27 +566,36 @@ class _StreamData:
     t_s: np.ndarray | None  # (n,) seconds from 0 for evenly spaced streams
     rate_hz: float  # nominal rate of the output samples
     labels: dict[str, tuple[np.ndarray, list[str] | None]]
+    stamps: SettledStamps | None = None  # the stamp policy's result (time columns only)
 
 
-def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOptions,
-                      progress: Progress) -> None:
-    """Ingest CSV recordings described by the mapping file ``options.mapping``.
-
-    Trials become groups named by ``trials.name`` (default file stem or folder name), with
-    the trial labels of the mapping; each stream becomes ``signals/<stream>`` with its
-    sensor in ``/sensors``. Every file read is recorded as a source.
-    """
+def load_plans(inputs: Sequence[Path], options: MappedCsvOptions
+               ) -> tuple[Path, CsvMapping, list[TrialPlan]]:
+    """The mapping file, the mapping and every trial's plan (headers checked)."""
     if options.mapping is None:
         raise InputError("the mapped-csv format needs a mapping file: pass `mapping='FILE.yaml'` "
                          "(see configs/mapping_example.yaml)")
     mapping_path = Path(options.mapping)
     mapping = load_mapping(mapping_path)
-    plans = plan_trials(inputs, mapping, mapping_path)
+    return mapping_path, mapping, plan_trials(inputs, mapping, mapping_path)
+
+
+def ingest_mapped_csv(inputs: Sequence[Path], options: MappedCsvOptions, writer: StoreWriter,
+                      progress: Progress) -> list[str]:
+    """Ingest CSV recordings described by the mapping file ``options.mapping``.
+
+    Trials become groups named by ``trials.name`` (default file stem or folder name), with
+    the trial labels of the mapping; each stream becomes ``signals/<stream>`` with its
+    sensor in ``/sensors``. Every file read is recorded as a source. Returns one note per
+    stream whose repeated or out-of-order stamps a ``time.stamps`` policy handled.
+    """
+    mapping_path, mapping, plans = load_plans(inputs, options)
     writer.h5.attrs["mapping_json"] = mapping.model_dump_json()
     rates: dict[str, list[float]] = {s.name: [] for s in mapping.streams}
+    met: dict[str, list[tuple[str, SettledStamps]]] = {s.name: [] for s in mapping.streams}
     progress.start(sum(len(set(p.files.values())) for p in plans), "reading CSV files")
     for plan in plans:
-        tables = _read_tables(plan, mapping, progress)
+        tables = read_tables(plan, mapping, progress)
         sources = [writer.add_source(p) for p in dict.fromkeys(plan.files.values())]
         streams = {s.name: _stream_data(s, plan, tables, mapping_path) for s in mapping.streams}
         timed = [d.t_raw_s[0] for d in streams.values() if d.t_raw_s is not None]
@@ -584,10 +611,14 @@ def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
         for s in mapping.streams:
             d = streams[s.name]
             t_s = d.t_raw_s - origin if d.t_raw_s is not None else d.t_s
-            trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data, t_s=t_s,
-                               sample_labels=d.labels)
-            trial.group["signals"][safe_name(s.name)].attrs["sample_rate_hz"] = d.rate_hz
+            group = trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data,
+                                       t_s=t_s, sample_labels=d.labels)
+            group.attrs["sample_rate_hz"] = d.rate_hz
             rates[s.name].append(d.rate_hz)
+            if d.stamps is not None and s.time is not None and s.time.stamps != "refuse":
+                _record_stamps(group.attrs, s.time.stamps, d.stamps)
+                if d.stamps.n_repeated or d.stamps.n_out_of_order:
+                    met[s.name].append((trial.name, d.stamps))
     for s in mapping.streams:
         names = output_channels(s, plans[0].channels[s.name])
         rate_hz = float(np.median(rates[s.name])) if rates[s.name] else ROW_RATE_HZ
@@ -600,9 +631,45 @@ def ingest_mapped_csv(inputs: list[Path], writer: StoreWriter, options: IngestOp
                           channel_units=[unit_of(s, n, mapping_path) for n in names],
                           description=description)
     progress.finish()
+    return [_stamps_note(s.name, s.time.stamps, met[s.name], len(plans))
+            for s in mapping.streams if s.time is not None and met[s.name]]
 
 
-def _read_tables(plan: TrialPlan, mapping: CsvMapping, progress: Progress) -> dict[str, CsvTable]:
+#: Trials a stamps note names before "and N more".
+MAX_TRIALS_NOTED = 5
+
+
+def _record_stamps(attrs: Any, policy: str, stamps: SettledStamps) -> None:
+    """The policy and what it met, as attributes of the stream's group (in every trial, so
+    a file says which policy its times went through even where nothing was late)."""
+    attrs["stamps_policy"] = policy
+    attrs["stamps_repeated"] = stamps.n_repeated
+    attrs["stamps_out_of_order"] = stamps.n_out_of_order
+    attrs["stamps_dropped"] = stamps.n_dropped
+
+
+def _stamps_note(stream: str, policy: str, met: list[tuple[str, SettledStamps]],
+                 n_trials: int) -> str:
+    """One line: how many trials of ``stream`` had late stamps, what the policy did, and
+    the first few trials with their counts."""
+    def counts(st: SettledStamps) -> str:
+        parts = [f"{n} {what}" for n, what in ((st.n_repeated, "repeated"),
+                                              (st.n_out_of_order, "out of order")) if n]
+        return " and ".join(parts)
+
+    dropped = sum(st.n_dropped for _, st in met)
+    did = {"drop_repeats": f"{dropped} sample(s) dropped, the first of each stamp kept",
+           "keep_last": f"{dropped} sample(s) dropped, the last of each stamp kept",
+           "spread": "every sample kept, spread evenly between neighbouring stamps"}[policy]
+    shown = ", ".join(f"{name} {counts(st)}" for name, st in met[:MAX_TRIALS_NOTED])
+    more = f" and {len(met) - MAX_TRIALS_NOTED} more" if len(met) > MAX_TRIALS_NOTED else ""
+    return (f"stream {stream!r}: {len(met)} of {n_trials} trial(s) had repeated or "
+            f"out-of-order time stamps ({shown}{more}); `stamps: {policy}`: {did} (each trial "
+            "records them in the stream attributes stamps_repeated, stamps_out_of_order, "
+            "stamps_dropped)")
+
+
+def read_tables(plan: TrialPlan, mapping: CsvMapping, progress: Progress) -> dict[str, CsvTable]:
     """Parse every file of a trial once, with all the columns any stream needs from it."""
     numeric: dict[str, list[str]] = {t: [] for t in plan.files}
     text: dict[str, list[str]] = {t: [] for t in plan.files}
@@ -658,16 +725,16 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
     if s.time.rate_from is not None:
         rate_hz = _value_from(tables[s.time.rate_from.file], s.time.rate_from.column)
     t_raw = t_even = None
+    settled = None
     if s.time.column is not None:
-        ttab = tables[s.time.file or s.file]
-        t_raw = ttab.columns[s.time.column] * s.time.seconds_per_unit
-        back = np.flatnonzero(np.diff(t_raw) < 0)
-        if len(back):
-            i = int(back[0])
-            raise InputError(f"time goes back from {ttab.columns[s.time.column][i]!r} (line "
-                             f"{ttab.line(i)}) to {ttab.columns[s.time.column][i + 1]!r}; "
-                             "timestamps must not decrease", path=ttab.path,
-                             where=f"line {ttab.line(i + 1)}, column {s.time.column!r}")
+        settled = _settled_times(s, tables[s.time.file or s.file], rate_hz)
+        t_raw = settled.t
+    labels = {lab.name: _label_values(lab.classes, tables[lab.file or s.file], lab.column)
+              for lab in s.sample_labels}
+    if settled is not None and settled.keep is not None:
+        data = data[settled.keep]
+        labels = {k: (v[settled.keep], c) for k, (v, c) in labels.items()}
+    if t_raw is not None:
         if rate_hz is None:
             steps = np.diff(t_raw)
             step = float(np.median(steps)) if len(steps) else 0.0
@@ -676,8 +743,6 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
         if rate_hz is None:  # the mapping model requires a time column or a rate
             raise RuntimeError(f"stream {s.name!r} has neither a time column nor a rate")
         t_even = np.arange(n, dtype=np.float64) / rate_hz
-    labels = {lab.name: _label_values(lab.classes, tables[lab.file or s.file], lab.column)
-              for lab in s.sample_labels}
     if s.unroll is not None:
         m = data.shape[1]
         base = t_raw if t_raw is not None else t_even
@@ -688,16 +753,63 @@ def _stream_data(s: Stream, plan: TrialPlan, tables: dict[str, CsvTable],
             t_even = t_new
         labels = {k: (np.repeat(v, m), c) for k, (v, c) in labels.items()}
         rate_hz = rate_hz * m
-    return _StreamData(data=data, t_raw_s=t_raw, t_s=t_even, rate_hz=float(rate_hz), labels=labels)
+    return _StreamData(data=data, t_raw_s=t_raw, t_s=t_even, rate_hz=float(rate_hz),
+                       labels=labels, stamps=settled)
+
+
+def _settled_times(s: Stream, ttab: CsvTable, rate_hz: float | None) -> SettledStamps:
+    """The stream's times in seconds after its ``time.stamps`` policy; the default
+    ``refuse`` raises at the first stamp that goes back (else the first repeated one),
+    naming its line."""
+    assert s.time is not None and s.time.column is not None
+    column = s.time.column
+    raw = ttab.columns[column]
+    t = raw * s.time.seconds_per_unit
+    stats = stamp_stats(t)
+    if stats.n_late and s.time.stamps == "refuse":
+        hint = (f"; or give `streams.{s.name}.time.stamps` in the mapping (drop_repeats, "
+                "keep_last or spread) to keep the recording")
+        if stats.first_out_of_order is not None:
+            i = stats.first_out_of_order
+            raise InputError(f"time goes back from {float(raw[i - 1])!r} (line "
+                             f"{ttab.line(i - 1)}) to {float(raw[i])!r}; timestamps must not "
+                             f"decrease{hint}", path=ttab.path,
+                             where=f"line {ttab.line(i)}, column {column!r}")
+        i = stats.first_repeated
+        assert i is not None
+        raise InputError(f"time stamp {float(raw[i])!r} repeats the one on line "
+                         f"{ttab.line(i - 1)}; "
+                         f"timestamps must increase{hint}", path=ttab.path,
+                         where=f"line {ttab.line(i)}, column {column!r}")
+    try:
+        return settle_stamps(t, s.time.stamps,
+                             last_interval=1.0 / rate_hz if rate_hz else None)
+    except StampError as exc:
+        raise InputError(f"cannot spread the stamps of column {column!r} ({exc}); give "
+                         f"`streams.{s.name}.time.sample_rate_hz`, or another `stamps` policy",
+                         path=ttab.path) from None
 
 
 def _write_row_trials(writer: StoreWriter, plan: TrialPlan, mapping: CsvMapping,
                       tables: dict[str, CsvTable], streams: dict[str, _StreamData],
                       sources: list[int]) -> None:
     """``rows_are: trials``: one trial per table row, each stream one sample at t = 0 s,
-    the row's label and group columns as trial labels. Names come from ``trials.name``
-    (fields ``{row}``, the label columns, the regex groups, ``{stem}``), by default
-    ``<stem>_<row>``."""
+    the row's label and group columns as trial labels (see :func:`row_trials`)."""
+    for i, name, labels in row_trials(plan, mapping, tables):
+        trial = writer.trial(name, labels=labels, sources=sources, table_row=i + 1)
+        for s in mapping.streams:
+            d = streams[s.name]
+            sample_labels = {k: (v[i:i + 1], c) for k, (v, c) in d.labels.items()}
+            trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data[i:i + 1],
+                               t_s=np.zeros(1), sample_labels=sample_labels)
+
+
+def row_trials(plan: TrialPlan, mapping: CsvMapping, tables: dict[str, CsvTable]
+               ) -> Iterator[tuple[int, str, dict[str, str | int | float]]]:
+    """``rows_are: trials``: (row index, trial name, trial labels) of every table row. Names
+    come from ``trials.name`` (fields ``{row}``, the label columns, the regex groups,
+    ``{stem}``), by default ``<stem>_<row>``; labels are the plan's and the row's label and
+    group columns."""
     table = tables[TABLE]
     columns = {c: [_label_value(v, c, table, i) for i, v in enumerate(table.columns[c])]
                for c in mapping.trials.label_column_names}
@@ -707,13 +819,7 @@ def _write_row_trials(writer: StoreWriter, plan: TrialPlan, mapping: CsvMapping,
     for i in range(table.n_rows):
         row_labels = {c: values[i] for c, values in columns.items()}
         fields = {**base, **{c: str(v) for c, v in row_labels.items()}, ROW_FIELD: str(i + 1)}
-        trial = writer.trial(render(template, fields), labels={**plan.labels, **row_labels},
-                             sources=sources, table_row=i + 1)
-        for s in mapping.streams:
-            d = streams[s.name]
-            labels = {k: (v[i:i + 1], c) for k, (v, c) in d.labels.items()}
-            trial.write_signal(s.name, sensor=safe_name(s.sensor_name), data=d.data[i:i + 1],
-                               t_s=np.zeros(1), sample_labels=labels)
+        yield i, render(template, fields), {**plan.labels, **row_labels}
 
 
 def _label_value(cell: object, column: str, table: CsvTable, row: int) -> str | int | float:
@@ -832,5 +938,38 @@ def _class_code(value: str, classes: list[str]) -> int | None:
     return None
 
 
-__all__ = ["CsvTable", "TrialPlan", "ingest_mapped_csv", "plan_trials", "read_csv_header",
-           "read_csv_table"]
+class MappedCsvFormat(IngestFormat[MappedCsvOptions]):
+    """Sampled-signal CSVs of any sensor, described by a YAML mapping (module docstring)."""
+
+    name = "mapped-csv"
+    title = "mapped CSV"
+    summary = ("sampled-signal CSVs of any sensor described by a YAML mapping (`mapping`): "
+               "files, folders or tables with one row per trial (`layout: rows`)")
+    suffixes = (".csv", ".tsv")
+    Options = MappedCsvOptions
+    claim_option = "mapping"  # the mapping says what the files are, whatever their suffix
+
+    def sniff(self, path: Path) -> bool:
+        if not path.is_dir():
+            return path.suffix.lower() in self.suffixes
+        try:  # a folder with CSV files in it, or in its subfolders (first hit only)
+            return next((True for p in path.rglob("*.csv") if not p.name.startswith(".")),
+                        False)
+        except OSError:
+            return False
+
+    def describe(self, path: Path, options: MappedCsvOptions) -> RecordingSummary:
+        from .mapped_csv_describe import describe_mapped_csv
+
+        return describe_mapped_csv(path, options, self)
+
+    def read(self, inputs: Sequence[Path], options: MappedCsvOptions, writer: StoreWriter,
+             progress: Progress) -> list[str]:
+        return ingest_mapped_csv(inputs, options, writer, progress)
+
+
+MAPPED_CSV = MappedCsvFormat()
+
+__all__ = ["MAPPED_CSV", "CsvTable", "MappedCsvFormat", "MappedCsvOptions", "TrialPlan",
+           "ingest_mapped_csv", "load_plans", "path_order", "plan_trials", "read_csv_header",
+           "read_csv_table", "read_tables", "row_trials"]

@@ -21,6 +21,7 @@ worked examples for two real datasets. In brief::
         channels: ["p_*"]            # names or glob patterns, in file order
         units: kPa                   # one unit, or {glob: unit}
         time: {column: t, unit: s}   # or {sample_rate_hz: 100} or {rate_from: {file, column}}
+                                     # stamps: refuse | drop_repeats | keep_last | spread
         sample_labels:
           - {name: slip, column: state, classes: [stick, slip]}
 
@@ -43,6 +44,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from ..config_file import key_line, read_yaml
 from ..errors import InputError
 from ..store.spec import load_spec
+from .stamps import StampPolicy
 
 #: Time-column units and their length in seconds.
 TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
@@ -201,7 +203,8 @@ class TimeBase(_Model):
     ``sample_rate_hz``/``rate_from`` only give the nominal rate; without it the samples
     are evenly spaced from 0 at that rate. Times are stored in seconds from the trial's
     first sample: the earliest first time of all the trial's column-timed streams (they
-    share one clock); evenly spaced streams start at 0. Time columns must not decrease.
+    share one clock); evenly spaced streams start at 0. A time column's repeated and
+    out-of-order stamps are refused unless ``stamps`` names a policy for them.
     """
 
     column: str | None = None
@@ -221,6 +224,14 @@ class TimeBase(_Model):
     """A fixed sampling rate in Hz (before any unroll)."""
     rate_from: ValueFrom | None = None
     """Read the rate in Hz per trial from a file (before any unroll)."""
+    stamps: StampPolicy = "refuse"
+    """What to do with rows whose stamp repeats the latest one or is earlier than it
+    (loggers that stamp in whole ms, or hold a sample): ``refuse`` (stop with the file and
+    line), ``drop_repeats`` (keep the first row of each stamp), ``keep_last`` (keep the last
+    row written before the clock moves on, at that stamp) or ``spread`` (keep every row and
+    spread the rows of one stamp evenly towards the next stamp). The ingest says per trial
+    how many it met (a note, and the stream attributes ``stamps_repeated`` and
+    ``stamps_out_of_order``)."""
 
     @model_validator(mode="after")
     def _one_source(self) -> TimeBase:
@@ -228,10 +239,11 @@ class TimeBase(_Model):
             raise ValueError("give either `sample_rate_hz` or `rate_from`, not both")
         if self.column is None and self.sample_rate_hz is None and self.rate_from is None:
             raise ValueError("give a time `column`, a `sample_rate_hz` or a `rate_from`")
-        about_column = self.file is not None or self.epoch or self.scale_s is not None
+        about_column = (self.file is not None or self.epoch or self.scale_s is not None
+                        or self.stamps != "refuse")
         if self.column is None and about_column:
-            raise ValueError("`file`, `epoch` and `scale_s` describe a time `column`; "
-                             "give `column` too")
+            raise ValueError("`file`, `epoch`, `scale_s` and `stamps` describe a time "
+                             "`column`; give `column` too")
         return self
 
     @property

@@ -15,7 +15,7 @@ from tactile_cli.accel.delay import onset_delays, onset_outcomes
 from tactile_cli.accel.prepare import prepare_file, segment_bounds
 from tactile_cli.accel.simulate import draw_surfaces, simulate_recording
 from tactile_cli.cli import app
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.learn.data import center_scale
 from tactile_cli.spectral import (
     band_power,
@@ -59,7 +59,7 @@ def test_scene_writes_the_paper_tree_and_ingests_unchanged(scene: Path, tmp_path
     assert (scene / "wood/0/0.16/data.csv").read_text().splitlines()[0] == \
         "L_x,L_y,L_z,R_x,R_y,R_z,v_slip,v_slide"
     h5 = tmp_path / "scene.h5"
-    ingest([scene], h5, options=IngestOptions(format="accel-tree"))
+    ingest([scene], h5, format="accel-tree")
     with TactileFile(h5) as f:
         assert len(f.trial_names) == 12
         sig = f.trial("plastic_45_0.48").signal("accel")
@@ -132,7 +132,7 @@ def test_the_grip_rings_the_bar_mode_at_rest():
 
 def test_prepare_segments_and_speed(scene: Path, tmp_path: Path):
     h5 = tmp_path / "scene.h5"
-    ingest([scene], h5, options=IngestOptions(format="accel-tree"))
+    ingest([scene], h5, format="accel-tree")
     out = prepare_file(h5, tmp_path / "prep.h5", segment_s=0.5)
     assert out.n_segments == 12 * 4
     with TactileFile(out.out) as f:
@@ -212,7 +212,7 @@ def test_detect_delay_end_to_end(scene: Path, tmp_path: Path):
     """A tiny FNN trained for two epochs: the command runs, reports the keys, and the
     numbers hang together (the delay is the paper's definition, not a quality bar)."""
     h5 = tmp_path / "scene.h5"
-    ingest([scene], h5, options=IngestOptions(format="accel-tree"))
+    ingest([scene], h5, format="accel-tree")
     prepare_file(h5, tmp_path / "prep.h5", segment_s=0.5)
     config = Path(__file__).resolve().parents[2] / "configs" / "train_fnn_vibro.yaml"
     text = config.read_text().replace("hidden: [512, 256]", "hidden: [16]") \

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
 from tactile_cli.cli import app
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 
 from ..ingest.test_ingest_out_dir import h5_differences
 
@@ -25,7 +25,7 @@ def test_out_dir_equals_one_file_runs_and_restart_skips(tmp_path: Path):
                                            "duration_s": 1.0})
     simulate_vibro_slip(cfg, tmp_path / "scene", seed=0)
     first = tmp_path / "a.h5"
-    ingest([tmp_path / "scene"], first, options=IngestOptions(format="accel-tree"))
+    ingest([tmp_path / "scene"], first, format="accel-tree")
     second = tmp_path / "b.h5"
     shutil.copyfile(first, second)
     bad = tmp_path / "c.h5"

@@ -740,9 +740,13 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
     # raw event tables
     ingest_events = ["ingest", "{IN}", "--width", "640", "--height", "480",
                      "--out", "{OUT}/o.h5", "--no-progress"]
+    # `tactile info` describes every raw format read-only: on a damaged input it may
+    # refuse or describe what it can read, but never traceback or write anything
+    info_raw = ["info", "{IN}"]
     for mutation, apply in _csv_mutations():
         d = add("events-csv", raw / "events.csv", "events.csv", mutation, "raw", apply)
         case(d, "ingest", ingest_events, REFUSE)
+        case(d, "info", info_raw, EITHER)
     for mutation, apply in [
         ("x-65535", _edit_text(_row(7, lambda r: _cell(r, 1, b"65535")))),
         ("y-negative", _edit_text(_row(7, lambda r: _cell(r, 2, b"-4")))),
@@ -752,6 +756,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
     ]:
         d = add("events-csv", raw / "events.csv", "events.csv", mutation, "raw", apply)
         case(d, "ingest", ingest_events, REFUSE)
+        case(d, "info", info_raw, EITHER)
     d = add("events-csv", raw / "events.csv", "events.csv", "rows-swapped", "raw",
             _edit_text(lambda ls: [ls[0], *ls[1:][::-1]]))
     case(d, "ingest", ingest_events, EITHER)  # sorting them on ingest is a fine answer too
@@ -773,6 +778,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
     ]:
         d = add("events-npy", npy, "events.npy", mutation, "raw", apply)
         case(d, "ingest", ingest_events, EITHER if mutation == "unsorted" else REFUSE)
+        case(d, "info", info_raw, EITHER)
     if (raw / "events.aedat4").exists():
         ae = raw / "events.aedat4"
         ingest_ae = ["ingest", "{IN}", "--out", "{OUT}/o.h5", "--no-progress"]
@@ -789,6 +795,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         ]:
             d = add("aedat4", ae, "events.aedat4", mutation, "raw", apply)
             case(d, "ingest", ingest_ae, expect)
+            case(d, "info", info_raw, expect)
     # annotations and trial labels of an ingest
     for name, flag in (("annotations.csv", "--annotations"),
                        ("trial_labels.csv", "--trial-labels")):
@@ -821,6 +828,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
     for mutation, apply in accel_muts:
         d = add("accel-tree", raw / "accel_tree", accel_csv, mutation, "raw", apply)
         case(d, "ingest", ingest_accel.copy(), REFUSE)
+        case(d, "info", ["info", "{IN}", "--format", "accel-tree"], EITHER)
         corpus.damaged[-1].entry = "accel_tree"
     # taxel CSVs and their mapping
     ingest_taxel = ["ingest", "{IN}", "--mapping", "{BASE}/cfg/taxels.yaml", "--out",
@@ -834,6 +842,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         corpus.damaged[-1].entry = "taxel"
         # a renamed channel column may simply fall outside the mapping's channel pattern
         case(d, "ingest", ingest_taxel, EITHER if mutation == "header-renamed" else REFUSE)
+        case(d, "info", ["info", "{IN}", "--mapping", "{BASE}/cfg/taxels.yaml"], EITHER)
     for mutation, apply in _yaml_mutations([("streams.0.units", "[1, 2]"),
                                             ("streams.0.channels", "[nothing_matches*]"),
                                             ("trials.pattern", "'(unclosed'"),
@@ -841,6 +850,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         d = add("mapping", base / "cfg" / "taxels.yaml", "taxels.yaml", mutation, "config", apply)
         case(d, "ingest", ["ingest", "{BASE}/raw/taxel", "--mapping", "{IN}", "--out",
                            "{OUT}/o.h5", "--no-progress"], REFUSE)
+        case(d, "info", ["info", "{BASE}/raw/taxel", "--mapping", "{IN}"], REFUSE)
     # image folders
     ingest_img = ["ingest", "{IN}", "--out", "{OUT}/o.h5", "--no-progress"]
     ts = "press_01/timestamps.csv"
@@ -862,6 +872,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         d = add("images", raw / "visuotactile", f"visuotactile/{target}", mutation, "raw", apply)
         d.entry = "visuotactile/press_01"
         case(d, "ingest", ingest_img, EITHER if mutation == "png-flip" else REFUSE)
+        case(d, "info", info_raw, EITHER)
 
     # configs
     cfg = base / "cfg"

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.ingest.accel_tree import MOTION_CLASSES, motion_class
 from tactile_cli.samples.signals import write_accel_tree
 from tactile_cli.store import validate_file
@@ -21,7 +21,7 @@ runner = CliRunner()
 
 
 def _ingest(inputs, out, **kw) -> Path:
-    return ingest([Path(p) for p in inputs], out, options=IngestOptions(format="accel-tree"),
+    return ingest([Path(p) for p in inputs], out, format="accel-tree",
                   command="test", **kw)
 
 

@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.ingest.aedat4_streams import ImuCollector
 from tactile_cli.store import StoreWriter, validate_file
 
@@ -157,5 +157,5 @@ def test_width_that_disagrees_names_the_file(tmp_path, multi):
     src, _ = multi
     out = tmp_path / "o.h5"
     with pytest.raises(InputError, match=r"rec\.aedat4: `width_px` 64 disagrees"):
-        ingest([src], out, options=IngestOptions(width_px=64))
+        ingest([src], out, options={"width_px": 64})
     _nothing_written(tmp_path, out)

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.ingest.aedat4_describe import describe_aedat4
 from tactile_cli.store import TactileFile, validate_file
 
@@ -100,7 +100,7 @@ def test_imu_only_file_ingests_its_samples(tmp_path):
 def test_sensor_option_names_the_camera(tmp_path):
     src = tmp_path / "aps.aedat4"
     write_multistream(src, streams=("frames", "imu"))
-    out = ingest([src], tmp_path / "o.h5", options=IngestOptions(sensor_name="davis"))
+    out = ingest([src], tmp_path / "o.h5", options={"sensor_name": "davis"})
     assert validate_file(out).ok
     with h5py.File(out) as f:
         assert sorted(f["sensors"]) == ["davis", "davis_imu"]
@@ -120,7 +120,7 @@ def test_event_sensor_options_for_a_file_without_events_are_one_line(tmp_path):
         "no event stream (found: frame); omit it")
     _nothing_written(tmp_path, out)
     with pytest.raises(InputError, match=r"`width_px` and `height_px` set the size"):
-        ingest([src], out, options=IngestOptions(width_px=W, height_px=H))
+        ingest([src], out, options={"width_px": W, "height_px": H})
     _nothing_written(tmp_path, out)
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest, mapped_csv
+from tactile_cli.ingest import ingest, mapped_csv
 from tactile_cli.ingest.image_sequence import read_timestamps
 from tactile_cli.ingest.mapped_csv import read_csv_table
 from tactile_cli.ingest.mapping import CsvDialect
@@ -45,8 +45,10 @@ def _run(folder: Path, skin: str, meta: str) -> None:
     (folder / "meta.csv").write_text(meta)
 
 
-def _ingest(inputs: list[Path], out: Path, **options) -> Path:
-    return ingest(inputs, out, options=IngestOptions(**options), command="test")
+def _ingest(inputs: list[Path], out: Path, *, format: str = "auto",
+            trial_labels: Path | None = None, **options) -> Path:
+    return ingest(inputs, out, format=format, options=options, trial_labels=trial_labels,
+                  command="test")
 
 
 # -- mapped CSVs --------------------------------------------------------------------------------

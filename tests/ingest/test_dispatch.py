@@ -7,32 +7,32 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, detect_format, ingest, parse_labels
+from tactile_cli.ingest import detect_format, ingest, parse_labels
 
 runner = CliRunner()
 
 
 def test_detect_by_suffix(tmp_path):
-    opts = IngestOptions()
-    assert detect_format([tmp_path / "a.aedat4"], opts) == "aedat4"
-    assert detect_format([tmp_path / "a.NPY"], opts) == "events-npy"
-    assert detect_format([tmp_path / "a.csv"], opts) == "events-csv"
-    assert detect_format([tmp_path], IngestOptions(mapping=tmp_path / "m.yaml")) == "mapped-csv"
-    assert detect_format([tmp_path], IngestOptions(format="accel-tree")) == "accel-tree"
+    assert detect_format([tmp_path / "a.aedat4"]).name == "aedat4"
+    assert detect_format([tmp_path / "a.NPY"]).name == "events-npy"
+    assert detect_format([tmp_path / "a.csv"]).name == "events-csv"
+    assert detect_format([tmp_path], options={"mapping": tmp_path / "m.yaml"}).name == \
+        "mapped-csv"
+    assert detect_format([tmp_path], format="accel-tree").name == "accel-tree"
 
 
 def test_unknown_and_mixed_formats(tmp_path):
     with pytest.raises(InputError, match=r"a\.txt: unknown format \(suffix '\.txt'\)"):
-        detect_format([tmp_path / "a.txt"], IngestOptions())
+        detect_format([tmp_path / "a.txt"])
     with pytest.raises(InputError, match="inputs mix formats"):
-        detect_format([tmp_path / "a.csv", tmp_path / "b.npy"], IngestOptions())
+        detect_format([tmp_path / "a.csv", tmp_path / "b.npy"])
     with pytest.raises(InputError, match="unknown format 'hdf4'; use one of"):
-        detect_format([tmp_path / "a.csv"], IngestOptions(format="hdf4"))
+        detect_format([tmp_path / "a.csv"], format="hdf4")
     (tmp_path / "d").mkdir()
     with pytest.raises(InputError,
                        match=r"cannot tell the format of a folder \(no PNG/JPG frames in it or "
                              r"in its subfolders\); pass `format='accel-tree'`"):
-        detect_format([tmp_path / "d"], IngestOptions())
+        detect_format([tmp_path / "d"])
 
 
 def test_parse_labels():

@@ -19,8 +19,8 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, events_table, ingest
-from tactile_cli.ingest.events_table import PolarityConvention, read_csv_blocks
+from tactile_cli.ingest import events_table, ingest
+from tactile_cli.ingest.events_table import EventTableOptions, PolarityConvention, read_csv_blocks
 from tactile_cli.samples.events import make_events, write_events_csv, write_events_npy
 from tactile_cli.store import StoreWriter, read_events, read_events_window, validate_file
 from tactile_cli.store import writer as writer_module
@@ -33,8 +33,8 @@ W, H = 64, 48
 DVX = ("aedat4", "dvxplorer_sample.aedat4")
 
 
-def _opts(**kw) -> IngestOptions:
-    return IngestOptions(**{"width_px": W, "height_px": H, "chunk_events": 1000, **kw})
+def _opts(**kw) -> EventTableOptions:
+    return EventTableOptions(**{"width_px": W, "height_px": H, "chunk_events": 1000, **kw})
 
 
 @pytest.fixture
@@ -84,7 +84,7 @@ def test_aedat4_matches_the_decoder_packet_by_packet(tmp_path):
     src = shared_path(*DVX)
     packets = [pk["events"] for pk in aedat.Decoder(src) if "events" in pk]
     raw = np.concatenate(packets)
-    out = ingest([src], tmp_path / "dvx.h5", options=IngestOptions(chunk_events=5000),
+    out = ingest([src], tmp_path / "dvx.h5", options={"chunk_events": 5000},
                  compression=Compression(1))
     ev = _stored(out, "dvxplorer_sample")
     np.testing.assert_array_equal(ev["t"], raw["t"].astype(np.int64))
@@ -98,7 +98,7 @@ def test_aedat4_two_files_one_camera_and_sensor_override(tmp_path):
     a, b = tmp_path / "a.aedat4", tmp_path / "b.aedat4"
     shutil.copy(src, a)
     shutil.copy(src, b)
-    out = ingest([a, b], tmp_path / "two.h5", options=IngestOptions(sensor_name="left cam"))
+    out = ingest([a, b], tmp_path / "two.h5", options={"sensor_name": "left cam"})
     with h5py.File(out) as f:
         assert list(f["sensors"]) == ["left_cam", "left_cam_imu"]  # one IMU sensor for both
         assert sorted(f["trials"]) == ["a", "b"]
@@ -109,7 +109,7 @@ def test_aedat4_two_files_one_camera_and_sensor_override(tmp_path):
 def test_aedat4_bad_files(tmp_path, damage):
     src = shared_path(*DVX)
     bad = tmp_path / "bad.aedat4"
-    options = IngestOptions()
+    options: dict = {}
     if damage == "truncated":
         bad.write_bytes(src.read_bytes()[:500_000])
         message = r"bad\.aedat4: .*AEDAT4.* cut short"
@@ -118,7 +118,7 @@ def test_aedat4_bad_files(tmp_path, damage):
         message = r"bad\.aedat4: not a readable AEDAT4 file \(.*magic"
     else:
         shutil.copy(src, bad)
-        options = IngestOptions(width_px=640)
+        options = {"width_px": 640}
         message = r"bad\.aedat4: `width_px` 640 disagrees with the file's sensor size 320x240 px"
     out = tmp_path / "out.h5"
     with pytest.raises(InputError, match=message):
@@ -359,7 +359,7 @@ def test_csv_without_geometry_or_events(tmp_path):
     src = tmp_path / "rec.csv"
     write_events_csv(src, 10, width=W, height=H, seed=1)
     with pytest.raises(InputError, match="pass `width_px` and `height_px`"):
-        ingest([src], tmp_path / "o.h5", options=IngestOptions())
+        ingest([src], tmp_path / "o.h5")
     src.write_text("t,x,y,p\n\n")
     with pytest.raises(InputError, match=rf"^{src}, line 2: no events after the header"):
         ingest([src], tmp_path / "o.h5", options=_opts())

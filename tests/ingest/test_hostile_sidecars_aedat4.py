@@ -74,6 +74,8 @@ def test_damaged_aedat4_is_one_line(tmp_path, capfd, name):
 def test_decoder_panic_is_caught_by_name(tmp_path, monkeypatch):
     """A decoder panic (pyo3_runtime.PanicException, a BaseException) is one InputError;
     KeyboardInterrupt is not swallowed."""
+    import aedat
+
     from tactile_cli.errors import InputError
     from tactile_cli.ingest import events_aedat4
 
@@ -82,14 +84,14 @@ def test_decoder_panic_is_caught_by_name(tmp_path, monkeypatch):
     def panics(path):
         raise PanicException("range start index 7602200 out of range")
 
-    monkeypatch.setattr(events_aedat4.aedat, "Decoder", panics)
+    monkeypatch.setattr(aedat, "Decoder", panics)
     with pytest.raises(InputError, match=r"x\.aedat4: not a readable AEDAT4 file \(range"):
         events_aedat4._open(tmp_path / "x.aedat4")
 
     def interrupted(path):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(events_aedat4.aedat, "Decoder", interrupted)
+    monkeypatch.setattr(aedat, "Decoder", interrupted)
     with pytest.raises(KeyboardInterrupt):
         events_aedat4._open(tmp_path / "x.aedat4")
 

@@ -12,13 +12,13 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, image_sequence, ingest
+from tactile_cli.ingest import image_sequence, ingest
 from tactile_cli.ingest.image_sequence import (
     DEFAULT_FRAME_RATE_HZ,
     load_rgb,
-    natural_key,
     scan_image_folder,
 )
+from tactile_cli.natural import natural_key
 from tactile_cli.samples.images import write_image_sequence
 from tactile_cli.store import StoreWriter, validate_file
 from tactile_cli.store.provenance import sha256_of
@@ -51,7 +51,7 @@ def test_png_round_trip_is_exact_with_sources_and_progress(tmp_path):
     b = _seq(tmp_path / "press_b", n=3, seed=2)
     progress = RecordingProgress()
     out = ingest([tmp_path / "press_a", tmp_path / "press_b"], tmp_path / "o.h5",
-                 options=IngestOptions(labels={"object": "ball"}), progress=progress)
+                 labels={"object": "ball"}, progress=progress)
     assert validate_file(out).ok
     assert (progress.total, progress.done, progress.finished) == (15, 15, True)
     with h5py.File(out) as h5:
@@ -240,7 +240,7 @@ def test_folders_of_different_sizes_are_refused(tmp_path):
 def test_width_option_must_match_the_frames(tmp_path):
     _seq(tmp_path / "seq", n=2)
     with pytest.raises(InputError, match=rf"`width_px` is 320 px but the frames are {W}x{H} px"):
-        ingest([tmp_path / "seq"], tmp_path / "o.h5", options=IngestOptions(width_px=320))
+        ingest([tmp_path / "seq"], tmp_path / "o.h5", options={"width_px": 320})
 
 
 @pytest.mark.parametrize(("damage", "message"), [
@@ -274,7 +274,7 @@ def test_reference_only_folder_and_file_input(tmp_path):
     with pytest.raises(InputError, match="no frames besides the reference reference.png"):
         scan_image_folder(tmp_path / "seq")
     with pytest.raises(InputError, match="reads folders of PNG/JPG frames"):
-        ingest([truth["reference_file"]], tmp_path / "o.h5", options=IngestOptions(format="images"))
+        ingest([truth["reference_file"]], tmp_path / "o.h5", format="images")
 
 
 def test_write_frames_in_memory_matches_the_appender(tmp_path):
@@ -378,7 +378,7 @@ def test_folder_of_sequence_folders_refuses_a_subfolder_without_frames(tmp_path)
     (tmp_path / "digit" / "calibration" / "gel.yaml").write_text("a: 1\n")
     with pytest.raises(InputError, match=r"digit: holds image-sequence folders \(press_1, \.\.\.\) "
                                          r"and calibration/, which has no PNG/JPG frames"):
-        ingest([tmp_path / "digit"], tmp_path / "o.h5", options=IngestOptions())
+        ingest([tmp_path / "digit"], tmp_path / "o.h5")
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match=r"empty: cannot tell the format of a folder"):
-        ingest([tmp_path / "empty"], tmp_path / "o.h5", options=IngestOptions())
+        ingest([tmp_path / "empty"], tmp_path / "o.h5")

@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.ingest.mapping import load_mapping
 from tactile_cli.samples.signals import write_taxel_recording
 from tactile_cli.store import validate_file
@@ -44,7 +44,7 @@ class RecordingProgress:
 
 
 def _ingest(inputs, mapping, out, **kw) -> Path:
-    return ingest([Path(p) for p in inputs], out, options=IngestOptions(mapping=Path(mapping)),
+    return ingest([Path(p) for p in inputs], out, options={"mapping": Path(mapping)},
                   command="test", **kw)
 
 

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.store import validate_file
 
 from ..conftest import REPO
@@ -50,7 +50,7 @@ def _mapping(tmp_path: Path, **trials) -> Path:
 
 
 def _ingest(table: Path, mapping: Path, out: Path) -> Path:
-    return ingest([table], out, options=IngestOptions(mapping=mapping), command="test")
+    return ingest([table], out, options={"mapping": mapping}, command="test")
 
 
 def _nothing_written(folder: Path, out: Path) -> None:

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.ingest.sidecars import number_or_text, read_annotations, read_trial_labels
 from tactile_cli.samples.events import write_events_csv, write_events_npy
 from tactile_cli.store import validate_file
@@ -86,7 +86,7 @@ def test_annotations_and_labels_round_trip_exactly(tmp_path, recordings):
 def test_a_trial_without_rows_gets_no_annotations(tmp_path, recordings):
     ann = _write(tmp_path / "ann.csv", "label,end_s,trial,start_s\npress,2.5,rec_a,1\n\n\n")
     out = ingest(recordings, tmp_path / "out.h5",
-                 options=IngestOptions(width_px=W, height_px=H, annotations=ann))
+                 options={"width_px": W, "height_px": H}, annotations=ann)
     with h5py.File(out) as f:
         assert "annotations" not in f["trials/rec_b"]
         assert f["trials/rec_a/annotations/start_s"][()].tolist() == [1.0]
@@ -216,7 +216,7 @@ def test_parsers_keep_file_order_and_lines(tmp_path):
 def test_table_events_time_origin(tmp_path, writer, suffix, t0_us, origin):
     src = tmp_path / f"rec{suffix}"
     truth = writer(src, 200, width=W, height=H, seed=1, t0_us=t0_us, mean_dt_us=50)
-    out = ingest([src], tmp_path / "o.h5", options=IngestOptions(width_px=W, height_px=H))
+    out = ingest([src], tmp_path / "o.h5", options={"width_px": W, "height_px": H})
     with h5py.File(out) as f:
         events = f["trials/rec/events"]
         assert int(events.attrs["t_origin_us"]) == origin

@@ -33,7 +33,7 @@ def vibro(tmp_path_factory) -> tuple[Path, Path]:
     2 s each, in 0.5 s segments (24 trials per file)."""
     from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
     from tactile_cli.accel.prepare import prepare_file
-    from tactile_cli.ingest import IngestOptions, ingest
+    from tactile_cli.ingest import ingest
 
     root = tmp_path_factory.mktemp("sweep_data")
     cfg = VibroSceneConfig.model_validate({"orientations_deg": [0], "motor_rps": [0.16, 0.48],
@@ -42,7 +42,7 @@ def vibro(tmp_path_factory) -> tuple[Path, Path]:
     for seed in (0, 1):
         simulate_vibro_slip(cfg, root / f"scene{seed}", seed=seed)
         ingest([root / f"scene{seed}"], root / f"scene{seed}.h5",
-               options=IngestOptions(format="accel-tree"))
+               format="accel-tree")
         out.append(prepare_file(root / f"scene{seed}.h5", root / f"prep{seed}.h5",
                                 segment_s=0.5).out)
     return Path(out[0]), Path(out[1])
