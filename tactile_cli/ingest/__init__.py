@@ -19,6 +19,7 @@ from typing import Any
 
 from ..config_file import missing_file_error
 from ..errors import InputError
+from ..input_guard import check_outputs
 from ..progress import NullProgress, Progress
 from ..store.writer import DEFAULT_COMPRESSION, Compression, StoreWriter
 from .contract import (
@@ -71,6 +72,10 @@ def ingest(
     for path in paths:
         if not path.exists():
             raise missing_file_error(path)
+    # a recording is never overwritten, nor written into (its folders are trees)
+    sidecars = [p for p in (annotations, trial_labels) if p is not None]
+    check_outputs({"out": out}, [p for p in paths if not p.is_dir()] + sidecars,
+                  trees=[p for p in paths if p.is_dir()])
     fmt = detect_format(paths, format=format, options=options)
     fmt_options = format_options(fmt, options)
     # the sidecars are small: check them before the (possibly long) ingest of the data
