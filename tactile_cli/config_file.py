@@ -124,6 +124,9 @@ def nesting_depth(value: Any) -> int:
     """Levels of lists, tuples and mappings in ``value`` (a scalar is 0), walked without
     recursion, stopping once past :data:`MAX_NESTING`."""
     deepest = 0
+    # YAML anchors share one object between many places (a "billion laughs" file shares
+    # each level ten times): a container is walked again only when reached deeper
+    seen: dict[int, int] = {}
     stack = [(value, 1)]
     while stack:
         item, depth = stack.pop()
@@ -133,6 +136,9 @@ def nesting_depth(value: Any) -> int:
             children = list(item)
         else:
             continue
+        if seen.get(id(item), 0) >= depth:
+            continue
+        seen[id(item)] = depth
         deepest = max(deepest, depth)
         if deepest > MAX_NESTING:
             break

@@ -54,3 +54,12 @@ def test_nesting_up_to_the_bound_is_read(tmp_path):
         parse_json(over, "over.json")
     with pytest.raises(InputError, match=r"bad.json, line 1, column 2: not valid JSON"):
         parse_json("{x", "bad.json")
+
+
+def test_an_anchor_bomb_is_walked_once_per_shared_level(tmp_path):
+    from tactile_cli.config_file import nesting_depth, parse_yaml
+
+    levels = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    levels += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]" for i in range(1, 9)]
+    value = parse_yaml("\n".join(levels) + "\n", tmp_path / "bomb.yaml")  # 10^9 leaves
+    assert nesting_depth(value) == 10
