@@ -79,7 +79,9 @@ def info_command(
 def _raw(summary: RecordingSummary, as_json: bool) -> None:
     """A raw recording's summary: a line, the streams, the trials, what is left out, notes."""
     if as_json:
-        typer.echo(json.dumps(summary.as_dict(), indent=2))
+        data = summary.as_dict()
+        data["hint"] = _flags(summary.hint)
+        typer.echo(json.dumps(data, indent=2))
         return
     console = Console(width=None if sys.stdout.isatty() else 150)
     console.print(f"[bold]{summary.file}[/] {summary.title} recording, "
@@ -117,7 +119,7 @@ def _raw(summary: RecordingSummary, as_json: bool) -> None:
         console.print(f"left out: {line}", highlight=False, soft_wrap=True)
     for line in summary.notes:
         console.print(f"note: {_flags(line)}", highlight=False, soft_wrap=True)
-    console.print(summary.hint, highlight=False, soft_wrap=True)
+    console.print(_flags(summary.hint), highlight=False, soft_wrap=True)
 
 
 def _num(value: float | None, spec: str) -> str:
@@ -126,7 +128,7 @@ def _num(value: float | None, spec: str) -> str:
 
 def _flags(text: str) -> str:
     """A library note with the format options it names spelt as ``tactile ingest`` flags."""
-    return to_flags(text, OPTION_FLAGS)
+    return to_flags(text, {"format": "--format", **OPTION_FLAGS})
 
 
 def _sensors(summary: FileSummary) -> Table:

@@ -258,7 +258,7 @@ def describe_accel_tree(root: Path, options: AccelTreeOptions, fmt: IngestFormat
              f"per-sample label motion: {MOTION_RULE}"]
     return RecordingSummary(file=str(root), format=fmt.name, title=fmt.title, size_bytes=size,
                             streams=streams, trials=trials, notes=notes,
-                            ingest_args=f"--format {fmt.name}")
+                            ingest_options={"format": fmt.name})
 
 
 class AccelTreeFormat(IngestFormat[AccelTreeOptions]):

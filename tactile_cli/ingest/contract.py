@@ -148,8 +148,9 @@ class RecordingSummary:
     file: the path described (a file or a folder); size_bytes: bytes of every file read;
     dropped: one line per thing an ingest would leave out (columns no stream reads, stream
     types the reader skips); notes: one line per thing to know before ingesting (timing
-    problems, assumed rates); ingest_args: the arguments an ingest of it needs besides the
-    output, for the hint (``--mapping m.yaml``).
+    problems, assumed rates); ingest_options: the format options an ingest of it needs, by
+    their Python names, for the hint (``{"mapping": "m.yaml"}``; the CLI spells them as
+    flags).
     """
 
     file: str
@@ -160,13 +161,14 @@ class RecordingSummary:
     trials: list[TrialSummary] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
-    ingest_args: str = ""
+    ingest_options: dict[str, str] = field(default_factory=dict)
 
     @property
     def hint(self) -> str:
-        args = f" {self.ingest_args}" if self.ingest_args else ""
+        given = " ".join(f"`{k}={v!r}`" for k, v in self.ingest_options.items())
         return (f"a raw {self.title} recording, not a tactile HDF5 file: other commands need "
-                f"it ingested (`tactile ingest {self.file}{args} --out FILE.h5`)")
+                f"it ingested (`tactile ingest {self.file} --out FILE.h5`"
+                + (f" with {given})" if given else ")"))
 
     def as_dict(self) -> dict[str, Any]:
         return {"file": self.file, "format": self.format, "title": self.title,

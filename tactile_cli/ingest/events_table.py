@@ -551,14 +551,14 @@ def _describe_events(path: Path, fmt: IngestFormat, options: EventTableOptions,
         origin = event_time_origin_us(tally.t_first)
         notes.append(f"trial time 0 is {origin} us "
                      f"({'relative times' if origin == 0 else 'the first event'})")
-    size = (f"--width {options.width_px} --height {options.height_px}"
+    size = ({"width_px": str(options.width_px), "height_px": str(options.height_px)}
             if options.width_px is not None and options.height_px is not None
-            else "--width WIDTH --height HEIGHT")
+            else {"width_px": "WIDTH", "height_px": "HEIGHT"})
     trial = TrialSummary(name=path.stem, source=str(path), counts={"events": tally.n},
                          duration_s=span_s)
     return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title,
                             size_bytes=path.stat().st_size, streams=[stream], trials=[trial],
-                            notes=notes, ingest_args=size)
+                            notes=notes, ingest_options=size)
 
 
 class EventCsvFormat(IngestFormat[EventTableOptions]):

@@ -70,7 +70,7 @@ def describe_mapped_csv(path: Path, options: MappedCsvOptions,
     return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title,
                             size_bytes=sum(p.stat().st_size for p in files), streams=streams,
                             trials=trials, dropped=_unread_columns(plans[0], mapping),
-                            notes=notes, ingest_args=f"--mapping {mapping_path}")
+                            notes=notes, ingest_options={"mapping": str(mapping_path)})
 
 
 class _StreamTally:
@@ -218,7 +218,7 @@ def _describe_columns(path: Path, fmt: IngestFormat) -> RecordingSummary:
         notes.append(f"{len(files)} CSV files; the first {MAX_FILES_LISTED} are listed")
     return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title,
                             size_bytes=sum(p.stat().st_size for p in files), streams=streams,
-                            trials=trials, notes=notes, ingest_args="--mapping FILE.yaml")
+                            trials=trials, notes=notes, ingest_options={"mapping": "FILE.yaml"})
 
 
 def _data_rows(path: Path) -> int:

@@ -109,7 +109,7 @@ def test_mapped_csv_with_and_without_a_mapping(samples, tmp_path):
     assert s["rate_hz"] == pytest.approx(100.0, rel=1e-4)
     assert (s["repeated_stamps"], s["out_of_order_stamps"]) == (0, 0)
     assert [t["name"] for t in data["trials"]] == ["foam_1", "foam_2", "wood_1", "wood_2"]
-    assert data["hint"].endswith(f"--mapping {mapping} --out FILE.h5`)")
+    assert data["hint"].endswith(f"--out FILE.h5` with --mapping {mapping})")
     out = ingest([samples / "taxel"], tmp_path / "t.h5", options={"mapping": mapping})
     with TactileFile(out) as f:
         assert sum(len(f.trial(t).signal("taxels").t_s) for t in f.trial_names) == s["count"]
