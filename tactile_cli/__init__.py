@@ -42,6 +42,8 @@ _VERBS = {
     "simulate_marker_events": "scene.marker_events",
     "accumulate_file": "events.recording",
     "estimate_slip_rates": "spatial.slip_rate",
+    "slip_rate_report": "spatial.pipeline",
+    "write_frames": "spatial.pipeline",
     "write_centroid_file": "spatial.stream",
     "synthesize": "synth",
     # the accelerometer-fingertip chain (paper 001)
@@ -59,7 +61,9 @@ _VERBS = {
     "write_feature_stream": "taxel.pipeline",
     # methods any stream enters
     "fit_fos_file": "fos.fit_file",
+    "fit_files": "fos.fit_files",
     "grade_trials": "grade.grading",
+    "grade_files": "grade.pipeline",
     "train": "learn.train",
     "evaluate": "learn.evaluate",
     "compare": "learn.compare",
@@ -67,6 +71,7 @@ _VERBS = {
     "perturb_evaluate": "learn.perturb",
     "build_report": "learn.report",
     "quicklook": "plots.quicklook",
+    "write_quicklook": "plots.quicklook",
 }
 
 

@@ -45,7 +45,7 @@ def test_action_index(label, index):
 
 
 @pytest.mark.parametrize(("module", "model"), [
-    ("tactile_cli.scene.config", "SceneConfig"),
+    ("tactile_cli.scene.config", "MarkerSceneConfig"),
     ("tactile_cli.synth.config", "SynthConfig"),
     ("tactile_cli.learn.config", "DataConfig"),
     ("tactile_cli.grade.config", "FeatureConfig"),

@@ -6,26 +6,73 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from ..errors import InputError
 from ..vocabulary import BIN_S
 from ._errors import Flag, run_guarded, seconds_as_ms
 from .progress import ProgressOption, RichProgress
+
+if TYPE_CHECKING:
+    from ..events.recording import FileAccumulation
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "bin_s": ("--bin-ms", seconds_as_ms),
     "smooth_bins": "--smooth",
+    "out": "--out",
+    "csv": "--csv",
+    "plot": "--plot",
 }
 
 
 def _fmt_s(value: float | None) -> str:
     return "" if value is None or not math.isfinite(value) else f"{value:.3f}"
+
+
+def _print(run: FileAccumulation, *, title: str, plot: Path | None) -> None:
+    """One row per trial (with --segment: the regions found and the share of bins as
+    annotated), the segmentation summary and the files written."""
+    console = Console(width=None if sys.stdout.isatty() else 160)
+    table = Table(title=title)
+    columns = ["trial", "bins", "events", "positive", "negative", "outside"]
+    if run.segmented:
+        columns += ["status", "press (s)", "slip (s)", "release (s)", "bins as annotated"]
+    for col in columns:
+        table.add_column(col, justify="left" if col in ("trial", "status") else "right")
+    for acc in run.trials:
+        c = acc.counts
+        row = [acc.trial, str(c.n_bins), f"{c.n_events:,}", f"{int(c.positive.sum()):,}",
+               f"{int(c.negative.sum()):,}", f"{c.n_outside:,}"]
+        if acc.segmentation is not None:
+            seg, score = acc.segmentation, acc.score
+            row += [seg.status, _fmt_s(seg.press_start_s), _fmt_s(seg.slip_start_s),
+                    _fmt_s(seg.release_start_s),
+                    "" if score is None else f"{100 * score.bin_accuracy:.1f} %"]
+        table.add_row(*row)
+    console.print(table)
+    summary = run.summary()
+    if run.skipped:
+        console.print(f"skipped {len(run.skipped)} trial(s) without events")
+    if run.segmented:
+        statuses = ", ".join(f"{k} {v}" for k, v in sorted(summary["segmentation_status"]
+                                                            .items()))
+        line = f"segmentation: {statuses}"
+        if summary["mean_bin_accuracy"] is not None:
+            line += (f"; bins as annotated: mean {100 * summary['mean_bin_accuracy']:.2f} %,"
+                     f" lowest {100 * summary['min_bin_accuracy']:.2f} %")
+        console.print(line)
+        for acc in run.trials:
+            if acc.segmentation is not None and acc.segmentation.message:
+                console.print(f"  {acc.trial}: {acc.segmentation.status}: "
+                              f"{acc.segmentation.message}", highlight=False)
+    for path in run.written:
+        console.print(f"wrote {path}", highlight=False)
+    if plot is not None:
+        console.print(f"wrote {len(run.figures)} figure(s) to {plot}", highlight=False)
 
 
 def accumulate_command(
@@ -74,85 +121,16 @@ def accumulate_command(
 
     def body() -> None:
         # imported here: the library pulls in the FOS package, which `tactile --help` skips
-        from ..events.recording import accumulate_file, write_bins_csv, write_counts
-        from ..interrupt import raise_if_requested
-        from ..store.outdir import check_output_folder, output_folder
-        from ..store.provenance import current_command
+        from ..events.recording import accumulate_file
 
-        if smooth % 2 == 0:
-            raise InputError(f"--smooth {smooth} must be odd (a centred moving average); "
-                             f"use {smooth + 1}")
-        if plot is not None:  # figures are added to an existing folder; a file there is not
-            check_output_folder(plot, merge=True)
-        for target, flag in ((out, "--out"), (csv_out, "--csv")):
-            if target is not None and target.is_dir():
-                raise InputError(f"{flag} is a folder; give a file name", path=target)
-            if target is not None and target.exists() and not overwrite:
-                raise InputError(f"{flag} output exists; pass --overwrite to replace it",
-                                 path=target)
         with RichProgress(enabled=progress) as bar:
             run = accumulate_file(file, trials=trial or None, bin_s=bin_ms / 1000.0,
-                                  smooth_bins=smooth, segment=segment, progress=bar)
-            if plot is not None:
-                from ..events.figure import plot_trial
-
-                bar.start(len(run.trials), "plotting trials")
-                with output_folder(plot, merge=True) as tmp:  # in place when every one is
-                    for acc in run.trials:
-                        raise_if_requested()
-                        plot_trial(acc, tmp)
-                        bar.advance(1)
-                bar.finish()
-        config = {"file": str(file), "trials": trial or None, "bin_s": bin_ms / 1000.0,
-                  "smooth_bins": smooth, "segment": segment}
-        written = []
-        if out is not None:
-            written.append(write_counts(run, out, command=current_command(), config=config,
-                                        overwrite=overwrite))
-        if csv_out is not None:
-            written.append(write_bins_csv(run, csv_out, overwrite=overwrite))
+                                  smooth_bins=smooth, segment=segment, out=out, csv=csv_out,
+                                  plot=plot, overwrite=overwrite, progress=bar)
         if as_json:
-            data = run.as_dict()
-            data["written"] = [str(p) for p in written]
-            typer.echo(json.dumps(data, indent=2, allow_nan=False))
-            return
-        console = Console(width=None if sys.stdout.isatty() else 160)
-        table = Table(title=f"{file}: {bin_ms:g} ms bins, moving average of {smooth}")
-        columns = ["trial", "bins", "events", "positive", "negative", "outside"]
-        if segment:
-            columns += ["status", "press (s)", "slip (s)", "release (s)", "bins as annotated"]
-        for col in columns:
-            table.add_column(col, justify="left" if col in ("trial", "status") else "right")
-        for acc in run.trials:
-            c = acc.counts
-            row = [acc.trial, str(c.n_bins), f"{c.n_events:,}", f"{int(c.positive.sum()):,}",
-                   f"{int(c.negative.sum()):,}", f"{c.n_outside:,}"]
-            if segment and acc.segmentation is not None:
-                seg = acc.segmentation
-                score = acc.score
-                row += [seg.status, _fmt_s(seg.press_start_s), _fmt_s(seg.slip_start_s),
-                        _fmt_s(seg.release_start_s),
-                        "" if score is None else f"{100 * score.bin_accuracy:.1f} %"]
-            table.add_row(*row)
-        console.print(table)
-        summary = run.summary()
-        if run.skipped:
-            console.print(f"skipped {len(run.skipped)} trial(s) without events")
-        if segment:
-            statuses = ", ".join(f"{k} {v}" for k, v in sorted(summary["segmentation_status"]
-                                                                .items()))
-            line = f"segmentation: {statuses}"
-            if summary["mean_bin_accuracy"] is not None:
-                line += (f"; bins as annotated: mean {100 * summary['mean_bin_accuracy']:.2f} %,"
-                         f" lowest {100 * summary['min_bin_accuracy']:.2f} %")
-            console.print(line)
-            for acc in run.trials:
-                if acc.segmentation is not None and acc.segmentation.message:
-                    console.print(f"  {acc.trial}: {acc.segmentation.status}: "
-                                  f"{acc.segmentation.message}", highlight=False)
-        for path in written:
-            console.print(f"wrote {path}", highlight=False)
-        if plot is not None:
-            console.print(f"wrote {len(run.trials)} figure(s) to {plot}", highlight=False)
+            typer.echo(json.dumps(run.as_dict(), indent=2, allow_nan=False))
+        else:
+            _print(run, title=f"{file}: {bin_ms:g} ms bins, moving average of {smooth}",
+                   plot=plot)
 
     run_guarded(body, flags=FLAGS)

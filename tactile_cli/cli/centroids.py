@@ -8,9 +8,11 @@ from typing import Annotated
 
 import typer
 
-from ..errors import InputError
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
 from .progress import ProgressOption, RichProgress
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {"out": "--out", "config": "--rois"}
 
 
 def centroids_command(
@@ -37,21 +39,11 @@ def centroids_command(
     per-bin action labels from the annotations."""
 
     def body() -> None:
-        from ..spatial.config import load_config
         from ..spatial.stream import write_centroid_file
-        from ..store.provenance import current_command
-        from ..store.provenance import provenance_record as provenance
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        if out.exists() and not overwrite:
-            raise InputError("output exists; pass --overwrite to replace it", path=out)
-        config = load_config(rois)
-        record = provenance([file, rois], {"rois": config.as_dict(), "trials": trial or "all"})
         with RichProgress(enabled=progress) as bar:
-            result = write_centroid_file(file, out, config, trials=trial,
-                                         command=current_command(), provenance=record,
-                                         overwrite=overwrite, progress=bar)
+            result = write_centroid_file(file, out, rois, trials=trial, overwrite=overwrite,
+                                         progress=bar)
         if as_json:
             typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
             return
@@ -61,4 +53,4 @@ def centroids_command(
                    f"measured in {100 * sum(measured) / len(measured):.1f} % of (bin, ROI) "
                    "cells, the rest filled with the ROI centre")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

@@ -7,7 +7,10 @@ from typing import Annotated
 
 import typer
 
-from ._errors import run_guarded
+from ._errors import Flag, run_guarded
+
+#: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
+FLAGS: dict[str, Flag] = {"out": "--out", "max_trials": "--max-trials"}
 
 
 def plot_command(
@@ -24,17 +27,8 @@ def plot_command(
     one self-contained HTML page that shows them with the files' summaries."""
 
     def body() -> None:
-        from ..plots.quicklook import write_html  # matplotlib loads only when plotting
-        from ..store.outdir import check_output_folder, output_folder
-        from ..store.trials import TactileFile
+        from ..plots.quicklook import write_quicklook  # matplotlib loads only when plotting
 
-        # figures are added to an existing --out (same names replaced); a file there is not
-        check_output_folder(out, merge=True)
-        for f in files:  # every input opens (schema gate included) before any work
-            with TactileFile(f):
-                pass
-        with output_folder(out, merge=True) as tmp:  # in place only when every figure is
-            write_html(list(files), tmp, max_trials=max_trials)
-        typer.echo(f"wrote {out / 'index.html'}")
+        typer.echo(f"wrote {write_quicklook(files, out, max_trials=max_trials)}")
 
-    run_guarded(body)
+    run_guarded(body, flags=FLAGS)

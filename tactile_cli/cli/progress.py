@@ -1,9 +1,10 @@
-"""A rich progress bar implementing :class:`tactile_cli.progress.Progress`."""
+"""Rich progress on stderr implementing :class:`tactile_cli.progress.Progress`: a bar
+(:class:`RichProgress`) and a spinner for one long step (:class:`Spinner`)."""
 
 from __future__ import annotations
 
 import sys
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -53,6 +54,27 @@ class RichProgress:
             task = self._bar.tasks[self._task]
             self._bar.update(self._task, completed=task.total)
             self._task = None
+
+
+class Spinner:
+    """A spinner on stderr from ``start`` to ``finish`` (only when stderr is a terminal):
+    for one long step whose progress cannot be counted (a compiled fit)."""
+
+    def __init__(self) -> None:
+        self._status: Any = None
+
+    def start(self, total: float, description: str) -> None:  # noqa: ARG002
+        if sys.stderr.isatty() and self._status is None:
+            self._status = Console(stderr=True).status(description)
+            self._status.__enter__()
+
+    def advance(self, amount: float = 1) -> None:
+        pass
+
+    def finish(self) -> None:
+        if self._status is not None:
+            self._status.__exit__(None, None, None)
+            self._status = None
 
 
 #: The ``--progress/--no-progress`` option every long-running command takes.

@@ -30,4 +30,4 @@ def samples_command(
         for name, args in result["commands"].items():
             typer.echo(f"{name}: tactile {shlex.join(args)} --out {name}.h5")
 
-    run_guarded(body)
+    run_guarded(body, flags={"n_events": "--n-events", "seed": "--seed"})

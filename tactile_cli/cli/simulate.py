@@ -82,9 +82,9 @@ def marker_events_command(
     """
 
     def body() -> None:
-        from ..scene import SceneConfig, load_scene_config, simulate_marker_events
+        from ..scene import MarkerSceneConfig, load_marker_scene_config, simulate_marker_events
 
-        cfg = load_scene_config(config) if config is not None else SceneConfig()
+        cfg = load_marker_scene_config(config) if config is not None else MarkerSceneConfig()
         if groups is not None or levels is not None:
             cfg = cfg.with_overrides(
                 groups=groups, levels=None if levels is None else _parse_levels(levels))

@@ -5,22 +5,54 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded, to_flags
+
+if TYPE_CHECKING:
+    from ..spatial.pipeline import SlipRateReport
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``):
 #: the library takes the ROIs and optics as ``config``, this command as the --rois file.
-FLAGS: dict[str, Flag] = {"config": "--rois"}
+FLAGS: dict[str, Flag] = {"config": "--rois", "plot": "--plot"}
 
 
 def _fmt(value: float | None, scale: float = 1.0, digits: int = 4) -> str:
     if value is None or value != value:  # None or NaN
         return "-"
     return f"{value * scale:.{digits}f}"
+
+
+def _print(report: SlipRateReport, *, title: str) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console(width=None if sys.stdout.isatty() else 160)
+    table = Table(title=title)
+    for col in ("trial", "status", "speed (m/s)", "+- se", "displacement (m)", "+- se",
+                "truth (m/s)", "error", "r2", "ROIs"):
+        table.add_column(col)
+    for r in report.results:
+        err = r["speed_rel_error"]
+        table.add_row(
+            r["trial"], r["status"] if r["status"] == "ok" else
+            f"{r['status']}: {to_flags(r['message'], FLAGS)}",
+            _fmt(r["speed_m_s"], digits=6), _fmt(r["speed_se_m_s"], digits=6),
+            _fmt(r["displacement_m"], digits=6), _fmt(r["displacement_se_m"], digits=6),
+            _fmt(r["truth_speed_m_s"], digits=6),
+            "-" if err is None else f"{err * 100:+.1f} %", _fmt(r["r2"], digits=3),
+            str(r["n_rois_used"]),
+        )
+    console.print(table)
+    s = report.summary
+    if s["n_with_truth"]:
+        console.print(f"speed error vs truth over {s['n_with_truth']} trial(s): mean "
+                      f"|error| {s['mean_abs_rel_error'] * 100:.1f} %, max "
+                      f"{s['max_abs_rel_error'] * 100:.1f} %")
+    if report.plot is not None:
+        console.print(f"wrote {report.plot}/slip_*.png and {report.plot / 'slip_rate.json'}")
 
 
 def slip_rate_command(
@@ -45,74 +77,13 @@ def slip_rate_command(
     standard errors; the truth is shown when the trial labels carry slip_speed_m_s."""
 
     def body() -> None:
-        from ..spatial.config import load_config
-        from ..spatial.slip_rate import estimate_slip_rates
-        from ..store.atomic import write_json
-        from ..store.outdir import check_output_folder, output_folder
-        from ..store.provenance import png_meta
-        from ..store.provenance import provenance_record as provenance
+        from ..spatial.pipeline import slip_rate_report
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        if plot is not None:  # figures are added to an existing folder; a file there is not
-            check_output_folder(plot, merge=True)
-        config = load_config(rois) if rois is not None else None
-        estimates = estimate_slip_rates(file, config, trials=trial)
-        results = [e.result.as_dict() for e in estimates]
-        errors = [abs(r["speed_rel_error"]) for r in results
-                  if r["speed_rel_error"] is not None]
-        record = provenance([file] + ([rois] if rois is not None else []), {
-            "config": None if config is None else config.as_dict(),
-            "rois_proposed": config is None or not config.rois,
-            "trials": trial or "all",
-        })
-        record["trials"] = results
-        record["summary"] = {
-            "n_trials": len(results),
-            "n_ok": sum(r["status"] == "ok" for r in results),
-            "n_with_truth": len(errors),
-            "mean_abs_rel_error": float(sum(errors) / len(errors)) if errors else None,
-            "max_abs_rel_error": float(max(errors)) if errors else None,
-        }
-        if plot is not None:
-            from ..spatial.render import plot_slip
-
-            meta = png_meta(record)
-            with output_folder(plot, merge=True) as tmp:  # in place when every figure is
-                for e in estimates:
-                    if e.trace is not None:
-                        plot_slip(e, tmp / f"slip_{e.result.trial}.png", meta=meta)
-                write_json(tmp / "slip_rate.json", record)
+        report = slip_rate_report(file, rois, trials=trial, plot=plot)
         if as_json:
-            typer.echo(json.dumps(record, indent=2, allow_nan=False))
-            return
-        from rich.console import Console
-        from rich.table import Table
-
-        console = Console(width=None if sys.stdout.isatty() else 160)
-        table = Table(title=f"Slip rate of {file} (speed = |slope of centroid y| over the "
-                      "slip region)")
-        for col in ("trial", "status", "speed (m/s)", "+- se", "displacement (m)", "+- se",
-                    "truth (m/s)", "error", "r2", "ROIs"):
-            table.add_column(col)
-        for r in results:
-            err = r["speed_rel_error"]
-            table.add_row(
-                r["trial"], r["status"] if r["status"] == "ok" else
-                f"{r['status']}: {to_flags(r['message'], FLAGS)}",
-                _fmt(r["speed_m_s"], digits=6), _fmt(r["speed_se_m_s"], digits=6),
-                _fmt(r["displacement_m"], digits=6), _fmt(r["displacement_se_m"], digits=6),
-                _fmt(r["truth_speed_m_s"], digits=6),
-                "-" if err is None else f"{err * 100:+.1f} %", _fmt(r["r2"], digits=3),
-                str(r["n_rois_used"]),
-            )
-        console.print(table)
-        s = record["summary"]
-        if s["n_with_truth"]:
-            console.print(f"speed error vs truth over {s['n_with_truth']} trial(s): mean "
-                          f"|error| {s['mean_abs_rel_error'] * 100:.1f} %, max "
-                          f"{s['max_abs_rel_error'] * 100:.1f} %")
-        if plot is not None:
-            console.print(f"wrote {plot}/slip_*.png and {plot / 'slip_rate.json'}")
+            typer.echo(json.dumps(report.as_dict(), indent=2, allow_nan=False))
+        else:
+            _print(report, title=f"Slip rate of {file} (speed = |slope of centroid y| over "
+                   "the slip region)")
 
     run_guarded(body, flags=FLAGS)

@@ -7,15 +7,13 @@ from typing import Annotated
 
 import typer
 
-from ..errors import InputError
-from ._errors import Flag, run_guarded
+from ._errors import Flag, run_guarded, seconds_as_ms
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {
-    "centroids": "--centroids",
-    "seed": "--seed",
-}
+FLAGS: dict[str, Flag] = {"centroids": "--centroids", "seed": "--seed", "n": "--n",
+                          "bin_s": ("--bin-ms", seconds_as_ms), "out": "--out",
+                          "fits": "--fits"}
 
 
 def synth_command(
@@ -49,14 +47,11 @@ def synth_command(
     noise; per-bin action labels and the force level in the schema."""
 
     def body() -> None:
-        from ..synth import load_synth_config, synthesize
+        from ..synth import synthesize
 
-        for given in (fits, centroids):
-            if given is not None and not given.is_file():
-                raise InputError("file not found", path=given)
-        cfg = load_synth_config(config).with_bin_s(None if bin_ms is None else bin_ms / 1000)
         with RichProgress(enabled=progress) as bar:
-            result = synthesize(out, n=n, seed=seed, config=cfg, fits=fits,
+            result = synthesize(out, n=n, seed=seed, config=config,
+                                bin_s=None if bin_ms is None else bin_ms / 1000, fits=fits,
                                 overwrite=overwrite, progress=bar, centroids=centroids)
         source = f"fits in {fits}" if fits is not None else "the config's fos section"
         extra = "" if centroids is None else f", ROI centroids from {centroids}"

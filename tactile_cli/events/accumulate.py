@@ -9,8 +9,9 @@ press, slip, release), and a moving average smooths it. This module is that accu
 - :func:`trial_counts`: the same for one :class:`~tactile_cli.store.trials.Trial` of an
   open tactile HDF5 file, reading its events in blocks of at most :data:`READ_BLOCK`
   events so memory stays bounded;
-- :func:`moving_average`: centred moving average whose window shrinks symmetrically at
-  the edges (no zero padding, so no bias towards zero at the trial's ends);
+- :func:`centred_moving_average`: the centred moving average, whose window shrinks
+  symmetrically at the edges (no zero padding, so no bias towards zero at the trial's ends;
+  ``spectral.causal_moving_average`` is the trailing one of live streams);
 - :func:`counts_to_labels`: per-bin action labels from a trial's annotations
   (:attr:`Trial.annotations <tactile_cli.store.trials.Trial.annotations>`).
 
@@ -80,10 +81,17 @@ class EventCounts:
         return np.stack([self.positive, self.negative, self.net], axis=1).astype(np.float32)
 
 
+#: The longest bin (s): one day; a longer one is a unit slip, and beyond about 9e12 s the
+#: microseconds no longer fit the int64 event times.
+MAX_BIN_S = 86_400.0
+
+
 def bin_us_of(bin_s: float) -> int:
-    """``bin_s`` as a whole number of microseconds; ValueError when it is not one (> 0)."""
-    if not (np.isfinite(bin_s) and bin_s > 0):
-        raise ValueError(f"`bin_s` (={bin_s}) must be a positive number of seconds")
+    """``bin_s`` as a whole number of microseconds; ValueError when it is not one (> 0, at
+    most :data:`MAX_BIN_S`)."""
+    if not (np.isfinite(bin_s) and 0 < bin_s <= MAX_BIN_S):
+        raise ValueError(f"`bin_s` (={bin_s}) must be positive and at most a day "
+                         f"({MAX_BIN_S:g} s)")
     bin_us = round(bin_s * 1e6)
     if bin_us < 1 or abs(bin_us - bin_s * 1e6) > 1e-6 * bin_s * 1e6:
         raise ValueError(f"`bin_s` (={bin_s}) must be a whole number of microseconds")
@@ -194,7 +202,7 @@ def trial_counts(trial: Trial, *, bin_s: float = BIN_S) -> EventCounts:
     return _counts(raw, bin_s, origin_us, n_outside)
 
 
-def moving_average(x: np.ndarray, window_bins: int) -> np.ndarray:
+def centred_moving_average(x: np.ndarray, window_bins: int) -> np.ndarray:
     """Centred moving average along axis 0, same shape as ``x``, float64.
 
     x: (n,) or (n, c). ``window_bins`` must be odd (a centred window); sample ``i`` is the
@@ -243,5 +251,5 @@ def counts_to_labels(
     return labels
 
 
-__all__ = ["CHANNELS", "READ_BLOCK", "EventCounts", "bin_events", "bin_us_of",
-           "counts_to_labels", "moving_average", "trial_counts"]
+__all__ = ["CHANNELS", "MAX_BIN_S", "READ_BLOCK", "EventCounts", "bin_events", "bin_us_of",
+           "counts_to_labels", "centred_moving_average", "trial_counts"]

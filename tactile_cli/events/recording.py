@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..input_guard import check_outputs, overlap
 from ..progress import NullProgress, Progress
 from ..store.atomic import atomic_file, check_output_file
 from ..store.trials import Annotation, TactileFile, Trial
@@ -28,10 +29,11 @@ from ..store.writer import StoreWriter
 from ..vocabulary import ACTIONS, BIN_S
 from .accumulate import (
     CHANNELS,
+    MAX_BIN_S,
     EventCounts,
     bin_us_of,
+    centred_moving_average,
     counts_to_labels,
-    moving_average,
     trial_counts,
 )
 from .segment import Segmentation, SegmentationScore, segment_actions, segmentation_accuracy
@@ -100,6 +102,8 @@ class FileAccumulation:
     trials: list[TrialAccumulation] = field(default_factory=list)
     sensors: dict[str, tuple[int, int]] = field(default_factory=dict)  # name -> (w, h) px
     skipped: list[str] = field(default_factory=list)  # trials without events (not named)
+    written: list[Path] = field(default_factory=list)  # the `out` and `csv` files written
+    figures: list[Path] = field(default_factory=list)  # the PNGs written into `plot`
 
     def summary(self) -> dict[str, Any]:
         scores = [t.score.bin_accuracy for t in self.trials
@@ -126,6 +130,7 @@ class FileAccumulation:
             "trials": [t.summary() for t in self.trials],
             "skipped": self.skipped,
             "summary": self.summary(),
+            "written": [str(p) for p in self.written],
         })
 
 
@@ -164,7 +169,7 @@ def _accumulate_trial(trial: Trial, *, bin_s: float, smooth_bins: int, segment: 
     truth = counts_to_labels(counts.t_s, annotations)
     acc = TrialAccumulation(
         trial=trial.name, sensor=trial.events.sensor_name if trial.has_events else "",
-        counts=counts, smoothed=moving_average(counts.net, smooth_bins),
+        counts=counts, smoothed=centred_moving_average(counts.net, smooth_bins),
         smooth_bins=smooth_bins, labels=trial.labels, split=trial.split,
         annotations=annotations, true_labels=truth if (truth >= 0).any() else None,
     )
@@ -176,6 +181,26 @@ def _accumulate_trial(trial: Trial, *, bin_s: float, smooth_bins: int, segment: 
     return acc
 
 
+def _check_outputs(path: Path, *, out: Path | None, csv: Path | None, plot: Path | None,
+                   overwrite: bool) -> None:
+    """Every output refused before any work: an input, a folder where a file goes (or
+    the reverse), an existing file without ``overwrite``, a place that cannot be written,
+    or one file named twice."""
+    from ..store.outdir import check_output_folder
+
+    check_outputs({"out": out, "csv": csv, "plot": plot}, [path])
+    if out is not None and csv is not None and overlap(out, csv) == "is":
+        raise InputError("`out` and `csv` name the same file; give two names", path=out)
+    if plot is not None:  # figures are added to an existing folder; a file there is not
+        check_output_folder(plot, merge=True)
+    for name, target in (("out", out), ("csv", csv)):
+        if target is not None and target.is_file() and not overwrite:
+            raise InputError(f"`{name}` output exists; pass `overwrite=True` to replace it",
+                             path=target)
+        if target is not None:
+            check_output_file(target, overwrite=overwrite)
+
+
 def accumulate_file(
     path: str | Path,
     *,
@@ -183,27 +208,76 @@ def accumulate_file(
     bin_s: float = BIN_S,
     smooth_bins: int = 5,
     segment: bool = False,
+    out: str | Path | None = None,
+    csv: str | Path | None = None,
+    plot: str | Path | None = None,
+    overwrite: bool = False,
     progress: Progress | None = None,
 ) -> FileAccumulation:
     """Event counts of the named trials of a tactile file (all trials with events when
-    ``trials`` is empty), their moving average of ``smooth_bins`` (odd) bins and, with
-    ``segment``, their action segmentation scored against the annotations.
+    ``trials`` is empty), their centred moving average of ``smooth_bins`` (odd) bins and,
+    with ``segment``, their action segmentation scored against the annotations.
+
+    Outputs, all checked before any work (an input, an existing file without
+    ``overwrite``, a place that cannot be written: one :class:`InputError`): ``out`` a new
+    tactile file of the count streams (:func:`write_counts`), ``csv`` one row per bin
+    (:func:`write_bins_csv`), ``plot`` a folder of one Fig. 10-style PNG per trial, each
+    written atomically; the paths are in the result's ``written`` and ``figures``.
 
     Raises :class:`InputError` for a file that is not a tactile file, an unknown trial, a
     named trial without events, or a bin width that is not a whole number of microseconds.
     """
     path = Path(path)
+    out, csv, plot = (None if p is None else Path(p) for p in (out, csv, plot))
     progress = progress or NullProgress()
     try:
         bin_us_of(bin_s)
-    except ValueError:
-        raise InputError(f"bin width {bin_s * 1e3:g} ms is not a whole number of "
-                         "microseconds; pass e.g. `bin_s=0.02`") from None
-    if smooth_bins < 1 or smooth_bins % 2 == 0:
-        raise InputError(f"smoothing window {smooth_bins} bins must be odd and >= 1 (a "
-                         "centred moving average); pass e.g. `smooth_bins=5`")
+    except ValueError as exc:
+        if bin_s > 0 and bin_s * 1e6 >= 1 and bin_s <= MAX_BIN_S:
+            raise InputError(f"bin width {bin_s * 1e3:g} ms is not a whole number of "
+                             "microseconds; pass e.g. `bin_s=0.02`") from None
+        raise InputError(str(exc)) from None
+    if smooth_bins < 1:
+        raise InputError(f"`smooth_bins` (={smooth_bins}) must be an odd number of bins >= 1 "
+                         "(a centred moving average); pass e.g. `smooth_bins=5`")
+    if smooth_bins % 2 == 0:
+        raise InputError(f"`smooth_bins` {smooth_bins} must be odd (a centred moving average); "
+                         f"use {smooth_bins + 1}")
     if not path.is_file():
         raise InputError("file not found", path=path)
+    _check_outputs(path, out=out, csv=csv, plot=plot, overwrite=overwrite)
+    run = _accumulate(path, trials=trials, bin_s=bin_s, smooth_bins=smooth_bins,
+                      segment=segment, progress=progress)
+    if plot is not None:
+        run.figures = _plot_trials(run, plot, progress)
+    if out is not None:
+        config = {"file": str(path), "trials": list(trials) if trials else None,
+                  "bin_s": float(bin_s), "smooth_bins": smooth_bins, "segment": segment}
+        run.written.append(write_counts(run, out, config=config, overwrite=overwrite))
+    if csv is not None:
+        run.written.append(write_bins_csv(run, csv, overwrite=overwrite))
+    return run
+
+
+def _plot_trials(run: FileAccumulation, plot: Path, progress: Progress) -> list[Path]:
+    """One PNG per trial into ``plot``, built aside and merged in when all are drawn."""
+    from ..interrupt import raise_if_requested
+    from ..store.outdir import output_folder
+    from .figure import plot_trial
+
+    progress.start(len(run.trials), "plotting trials")
+    figures = []
+    with output_folder(plot, merge=True) as tmp:  # in place when every one is
+        for acc in run.trials:
+            raise_if_requested()
+            figures.append(plot / plot_trial(acc, tmp).name)
+            progress.advance(1)
+    progress.finish()
+    return figures
+
+
+def _accumulate(path: Path, *, trials: Sequence[str] | None, bin_s: float, smooth_bins: int,
+                segment: bool, progress: Progress) -> FileAccumulation:
     with TactileFile(path) as tf:
         selected, skipped = _select_trials(tf, trials)
         sensors = {}

@@ -63,7 +63,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..vocabulary import ACTIONS, BIN_S
-from .accumulate import moving_average
+from .accumulate import centred_moving_average
 
 #: Segmentation status values.
 STATUSES: tuple[str, ...] = ("ok", "uncertain", "failed")
@@ -291,7 +291,7 @@ class _Trial:
         self.hi = self.lo + bin_s
         self.t = self.lo + 0.5 * bin_s
         self.opts = opts
-        self.s = moving_average(net, opts.smooth_bins)
+        self.s = centred_moving_average(net, opts.smooth_bins)
         self.baseline = float("nan")
         self.noise_std = float("nan")
         self.limit = float("inf")  # saturation limit found by the slip fit (events/bin)

@@ -20,6 +20,8 @@ _EXPORTS = {
     "second_order_basis": "models", "second_order_response": "models",
     "step_response": "models", "unit_response": "models",
     "OrderSelection": "order", "select_order": "order",
+    "FitFosResult": "fit_files", "RegionResult": "fit_files", "fit_files": "fit_files",
+    "fit_options": "fit_files",
 }
 
 __all__ = sorted(_EXPORTS)

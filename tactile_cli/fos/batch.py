@@ -31,7 +31,7 @@ from ..errors import InputError
 from ..store.provenance import current_command
 from ..store.trials import TactileFile
 from .fit import FitOptions
-from .table import GROUP_NAMES
+from .table import GROUP_NAMES, fit_summary
 
 
 def _config_text(config: Mapping[str, Any] | None) -> str | None:
@@ -54,17 +54,6 @@ def already_fitted(path: Path, regions: Sequence[str], config: Mapping[str, Any]
     except InputError:
         return False
     return True
-
-
-def _summary(records: list[dict[str, Any]]) -> dict[str, Any]:
-    import numpy as np
-
-    ok = [r for r in records if r["status"] == "converged"]
-    r_values = [r["pearson_r"] for r in ok if r["pearson_r"] is not None]
-    return {"n_trials": len(records), "n_converged": len(ok),
-            "n_failed": len(records) - len(ok),
-            "median_pearson_r": float(np.median(r_values)) if r_values else None,
-            "verdict_counts": dict(Counter(r["order_verdict"] for r in records))}
 
 
 def fit_task(spec: dict[str, Any]) -> dict[str, Any]:
@@ -92,7 +81,7 @@ def fit_task(spec: dict[str, Any]) -> dict[str, Any]:
             message = next(r["status_message"] for r in recs if r["status"] == status)
             notes.append(f"{region}: {status} ({n} trial(s)): {message}")
     out: dict[str, Any] = {"written": result.written, "bin_s": result.bin_s,
-                           "summary": {r: _summary(recs) for r, recs in records.items()},
+                           "summary": {r: fit_summary(recs) for r, recs in records.items()},
                            "notes": notes}
     if spec["records"]:
         out["records"] = records

@@ -41,6 +41,15 @@ from .step_detect import MIN_SNR, best_step_start, detect_steps, level_before
 
 REDUCE_MODES: tuple[str, ...] = ("none", "mean")
 STREAM_REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
+#: Curves (trial x channel x region; a channel searched for steps counts once) that one
+#: call reads at most by default: 4,096 take about 20 s on one core, the 76,800 pixels of a
+#: 320 x 240 height map about 7 minutes.
+MAX_CURVES = 4096
+#: CPU seconds per curve on one core, for the estimate in the refusal (measured with 2,000
+#: channels of 30 samples, order test included: ~2.5 ms to search a channel for steps,
+#: ~3 ms to fit a curve and test the second order).
+SEARCH_S_PER_CURVE = 2.5e-3
+FIT_S_PER_CURVE = 3e-3
 
 
 @dataclass(frozen=True)
@@ -111,6 +120,42 @@ def _found_regions(t_s: np.ndarray, x: np.ndarray, *, model: str, want: str | No
     return _numbered([sp for sp in spans if want is None or sp[2] == want])
 
 
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.2g} s" if seconds < 10 else f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min"
+
+
+def _check_size(tf: TactileFile, stream: str, *, channels: str | None, reduce: str,
+                want: str | None, regions: str, max_curves: int) -> None:
+    """Refuse, before any sample is read, more than ``max_curves`` curves to search or fit
+    (counted from the channel names and annotations), with the time they would take."""
+    searched = fitted = n_channels = 0
+    for name in tf.trial_names:
+        trial = tf.trial(name)
+        if not trial.has_signal(stream):
+            continue  # the reading loop says so
+        chosen = match_channels(trial.signal_sensor(stream).channel_names, channels)
+        n_channels = max(n_channels, len(chosen))
+        n = min(len(chosen), 1) if reduce == "mean" else len(chosen)
+        spans = sum(1 for a in trial.annotations
+                    if want is None or a.label.strip().lower() == want)
+        if regions == "detect" or (regions == "auto" and not spans):
+            searched += n
+            fitted += n  # at least one step each, were one found everywhere
+        else:
+            fitted += n * spans
+    if max(searched, fitted) <= max_curves:
+        return
+    seconds = searched * SEARCH_S_PER_CURVE + fitted * FIT_S_PER_CURVE
+    work = f"{searched:,} curves to search for steps" if searched else f"{fitted:,} curves"
+    raise InputError(f"stream {stream!r}: {work} ({len(tf.trial_names)} trial(s) of up to "
+                     f"{n_channels:,} channels), more than `max_curves` (={max_curves}); "
+                     f"that is about {_duration(seconds)} of work on one core: choose "
+                     "channels with `channels` (globs) or fit their mean with "
+                     "`reduce='mean'`", path=tf.path)
+
+
 def read_stream_curves(
     source: str | Path | TactileFile,
     stream: str,
@@ -122,6 +167,7 @@ def read_stream_curves(
     model: str = "step",
     min_snr: float = MIN_SNR,
     min_points: int = 4,
+    max_curves: int = MAX_CURVES,
 ) -> StreamCurves:
     """The responses of ``stream`` over the regions of every trial (see the module doc).
     ``region_label``: only regions with this label (annotations: any label, case and
@@ -129,7 +175,8 @@ def read_stream_curves(
 
     Raises :class:`InputError` for a file without trials, a trial without the stream, a
     glob that matches no channel, channels of several units averaged, a trial without
-    (matching) annotations, a region with fewer than ``min_points`` samples, or no step
+    (matching) annotations, a region with fewer than ``min_points`` samples, more than
+    ``max_curves`` curves to search or fit (with the time they would take), or no step
     found in any curve of the file.
     """
     if reduce not in REDUCE_MODES:
@@ -140,7 +187,8 @@ def read_stream_curves(
         with TactileFile(source) as tf:
             return read_stream_curves(tf, stream, channels=channels, reduce=reduce,
                                       region_label=region_label, regions=regions,
-                                      model=model, min_snr=min_snr, min_points=min_points)
+                                      model=model, min_snr=min_snr, min_points=min_points,
+                                      max_curves=max_curves)
     tf, path = source, source.path
     if not tf.trial_names:
         raise InputError("the file has no trials", path=path)
@@ -149,6 +197,8 @@ def read_stream_curves(
     if regions == "detect" and want is not None and want not in found_labels:
         raise InputError(f"`region_label` (={region_label!r}): regions found in the signal "
                          f"are labelled {' or '.join(found_labels)}", path=path)
+    _check_size(tf, stream, channels=channels, reduce=reduce, want=want, regions=regions,
+                max_curves=max_curves)
     out: list[StreamCurve] = []
     no_step: list[str] = []
     for name in tf.trial_names:
@@ -173,7 +223,8 @@ def read_stream_curves(
                              "); add them at ingest (`tactile ingest --annotations FILE`) or "
                              "find steps in the signal (`regions='detect'`)",
                              path=path, where=trial.where)
-        sig = trial.signal(stream, channels=chosen)
+        # all channels: no per-name lookup (76,800 pixels of a height map)
+        sig = trial.signal(stream, channels=None if chosen == list(names) else chosen)
         data = np.asarray(sig.data, dtype=np.float64)
         units = list(sig.channel_units)
         labels = list(sig.channel_names)
@@ -213,5 +264,5 @@ def read_stream_curves(
     return StreamCurves(out, no_step)
 
 
-__all__ = ["REDUCE_MODES", "STREAM_REGION_MODES", "StreamCurve", "StreamCurves",
+__all__ = ["MAX_CURVES", "REDUCE_MODES", "STREAM_REGION_MODES", "StreamCurve", "StreamCurves",
            "match_channels", "read_stream_curves"]

@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -25,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError
+from ..store.atomic import atomic_file
 from ..store.trials import TactileFile
 from ..store.update import write_columns
 
@@ -97,25 +99,38 @@ def fit_records(
     return out
 
 
-def write_csv(path: str | Path, records: Sequence[Mapping[str, Any]]) -> Path:
+def write_csv(path: str | Path, records: Sequence[Mapping[str, Any]], *,
+              overwrite: bool = False) -> Path:
     """Write records (from :func:`fit_records`) as a CSV with a header; empty cells for None.
-    Written to a temporary file and renamed into place."""
-    path = Path(path)
+    Written through the store's atomic writer (an existing ``path`` only with
+    ``overwrite``, replaced when the table is complete)."""
     keys: list[str] = []
     for rec in records:
         keys.extend(k for k in rec if k not in keys)
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            writer = csv.DictWriter(f, fieldnames=keys, restval="")
-            writer.writeheader()
-            for rec in records:
-                writer.writerow({k: "" if v is None else v for k, v in rec.items()})
-        tmp.replace(path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    with atomic_file(path, overwrite=overwrite) as tmp, \
+            open(tmp, "w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=keys, restval="")
+        writer.writeheader()
+        for rec in records:
+            writer.writerow({k: "" if v is None else v for k, v in rec.items()})
+    return Path(path)
+
+
+def fit_summary(records: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """Counts of a region's fits (from :func:`fit_records`): ``n_trials``, ``n_converged``,
+    ``n_failed``, the median and lowest Pearson R of the converged ones (None when there
+    is none), and how many rows have each status and each order verdict."""
+    ok = [r for r in records if r["status"] == "converged"]
+    r_values = [r["pearson_r"] for r in ok if r["pearson_r"] is not None]
+    return {
+        "n_trials": len(records),
+        "n_converged": len(ok),
+        "n_failed": len(records) - len(ok),
+        "median_pearson_r": float(np.median(r_values)) if r_values else None,
+        "min_pearson_r": float(np.min(r_values)) if r_values else None,
+        "status_counts": dict(Counter(r["status"] for r in records)),
+        "verdict_counts": dict(Counter(r["order_verdict"] for r in records)),
+    }
 
 
 def write_fit_group(group: DerivedGroup, rf: RegionFits, *, bin_s: float | None) -> None:
@@ -160,5 +175,5 @@ def read_fit_group(source: str | Path | TactileFile, name: str) -> dict[str, np.
     return {c: out[c] for c in COLUMNS}
 
 
-__all__ = ["COLUMNS", "GROUP_NAMES", "UNITS", "fit_columns", "fit_records", "read_fit_group",
-           "write_csv", "write_fit_group"]
+__all__ = ["COLUMNS", "GROUP_NAMES", "UNITS", "fit_columns", "fit_records", "fit_summary",
+           "read_fit_group", "write_csv", "write_fit_group"]

@@ -33,6 +33,10 @@ from .grading import GradeReport as GradeReport
 from .grading import GradeSummary as GradeSummary
 from .grading import grade_trials as grade_trials
 from .grading import true_grade_index as true_grade_index
+from .pipeline import Calibration as Calibration
+from .pipeline import GradeRun as GradeRun
+from .pipeline import calibrate_config as calibrate_config
+from .pipeline import grade_files as grade_files
 
 #: File name of the default (marker-sensor) config shipped inside the package; the same
 #: file is configs/grade_marker.yaml in the repository.

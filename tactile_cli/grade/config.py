@@ -273,16 +273,18 @@ def _allowed(keys: list[Any], raw: dict[str, Any]) -> list[str]:
     return []
 
 
-def save_config(config: GraderConfig, path: str | Path, *, header: str = "") -> Path:
+def save_config(config: GraderConfig, path: str | Path, *, header: str = "",
+                overwrite: bool = True) -> Path:
     """Write ``config`` as YAML to ``path`` atomically (``store.atomic.write_text``),
-    with ``header`` as leading comment lines."""
+    with ``header`` as leading comment lines; an existing ``path`` is replaced only with
+    ``overwrite``."""
     path = Path(path)
     data = config.as_yaml_dict()
     body = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
     comment = "".join(f"# {line}\n" if line else "#\n" for line in header.splitlines())
     text = comment + body
     config_from_dict(yaml.safe_load(text), path=path)  # what is written reads back
-    return write_text(path, text, overwrite=True)
+    return write_text(path, text, overwrite=overwrite)
 
 
 __all__ = ["FeatureConfig", "GraderConfig", "OutputConfig", "RuleConfig", "TermConfig",

@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..store.atomic import save_figure  # noqa: E402
 from .config import GraderConfig  # noqa: E402
 from .fuzzy import infer  # noqa: E402
 from .grading import GradeReport  # noqa: E402
@@ -26,12 +27,9 @@ def _knots(mfs) -> list[float]:
 
 
 def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    """``fig`` as a PNG through the store's atomic writer (closed afterwards)."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return save_figure(fig, path, dpi=110, overwrite=True)
 
 
 def plot_membership(config: GraderConfig, path: Path) -> Path:

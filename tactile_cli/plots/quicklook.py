@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ import numpy as np  # noqa: E402
 
 from ..errors import InputError  # noqa: E402
 from ..interrupt import raise_if_requested  # noqa: E402
+from ..store.atomic import write_text  # noqa: E402
 from ..store.reader import summarize  # noqa: E402
 from ..store.trials import Frames, Signal, TactileFile, Trial, TrialEvents  # noqa: E402
 
@@ -268,9 +268,26 @@ def write_html(
                 f"<figure><img src='data:image/png;base64,{data}'>"
                 f"<figcaption>{html.escape(fig.caption)}</figcaption></figure>"
             )
-    page = out_dir / "index.html"
-    buf = io.StringIO("\n".join(parts))
-    tmp = page.with_name(".index.html.tmp")
-    tmp.write_text(buf.getvalue(), encoding="utf-8")
-    tmp.replace(page)
-    return page
+    return write_text(out_dir / "index.html", "\n".join(parts), overwrite=True)
+
+
+def write_quicklook(files: list[str | Path], out: str | Path, *, max_trials: int = 4) -> Path:
+    """The figures of the first ``max_trials`` trials of every file and one self-contained
+    ``index.html`` (:func:`write_html`), added to folder ``out`` (same names replaced) when
+    all are drawn. Raises :class:`InputError` before any figure for an output that is,
+    holds or lies inside an input, one that cannot be written, or a file that does not
+    open as a tactile file. Returns the page."""
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder, output_folder
+
+    if max_trials < 1:
+        raise InputError(f"`max_trials` (={max_trials}) must be at least 1")
+    paths = [Path(f) for f in files]
+    check_outputs({"out": out}, paths)
+    check_output_folder(out, merge=True)  # figures are added to it; a file there is not
+    for f in paths:  # every input opens (schema gate included) before any work
+        with TactileFile(f):
+            pass
+    with output_folder(out, merge=True) as tmp:  # in place only when every figure is
+        write_html(paths, tmp, max_trials=max_trials)
+    return Path(out) / "index.html"

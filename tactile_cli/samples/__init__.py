@@ -19,6 +19,10 @@ from .signals import write_accel_tree as write_accel_tree
 from .signals import write_taxel_recording as write_taxel_recording
 
 EVENT_WIDTH, EVENT_HEIGHT = 640, 480
+#: Events per event recording at most: each is held in memory (~40 bytes while the CSV
+#: is formatted) and written twice (~20 bytes of CSV, 13 of NPY).
+MAX_EVENTS = 20_000_000
+_BYTES_PER_EVENT = 75
 
 
 def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) -> dict[str, Any]:
@@ -34,6 +38,16 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
 
     Returns ``{"paths": {...}, "commands": {name: [args after "tactile"]}}``.
     """
+    from ..config_file import format_bytes
+    from ..errors import InputError
+
+    if not 1 <= n_events <= MAX_EVENTS:
+        raise InputError(f"`n_events` (={n_events}) must be 1 to {MAX_EVENTS:,} (sample "
+                         f"recordings; {n_events:,} would take about "
+                         f"{format_bytes(max(n_events, 0) * _BYTES_PER_EVENT)} of memory and "
+                         "disk)")
+    if seed < 0:
+        raise InputError(f"`seed` (={seed}) must be >= 0")
     out = check_output_folder(out_dir, merge=True)  # added to; a file there is refused
     # written into a hidden folder beside ``out_dir``, moved in when every file is
     with output_folder(out, merge=True) as tmp:

@@ -7,13 +7,12 @@ background noise, big-force saturation, and marker-strip ROIs whose event-weight
 centroid moves with the slip speed (eq. 15).
 """
 
-from .config import SceneConfig as SceneConfig
-from .config import load_scene_config as load_scene_config
+from .config import MarkerSceneConfig as MarkerSceneConfig
+from .config import load_marker_scene_config as load_marker_scene_config
 from .events import EVENT_DTYPE as EVENT_DTYPE
-from .events import TrialEvents as TrialEvents
+from .events import SimulatedEvents as SimulatedEvents
 from .events import strip_offset_px as strip_offset_px
 from .events import trial_events as trial_events
-from .layout import Roi as Roi
 from .layout import SceneLayout as SceneLayout
 from .layout import scene_layout as scene_layout
 from .layout import slip_px_per_m as slip_px_per_m
@@ -28,7 +27,7 @@ from .trials import plan_trials as plan_trials
 from .trials import trial_name as trial_name
 from .trials import trial_rng as trial_rng
 
-__all__ = ["SceneConfig", "load_scene_config", "EVENT_DTYPE", "TrialEvents", "strip_offset_px",
-           "trial_events", "Roi", "SceneLayout", "scene_layout", "slip_px_per_m", "SceneResult",
-           "SimulatedTrial", "simulate_marker_events", "SceneTrial", "TrialRates", "draw_trial",
-           "expected_rates", "plan_trials", "trial_name", "trial_rng"]
+__all__ = ["EVENT_DTYPE", "MarkerSceneConfig", "SceneLayout", "SceneResult", "SceneTrial",
+           "SimulatedEvents", "SimulatedTrial", "TrialRates", "draw_trial", "expected_rates",
+           "load_marker_scene_config", "plan_trials", "scene_layout", "simulate_marker_events",
+           "slip_px_per_m", "strip_offset_px", "trial_events", "trial_name", "trial_rng"]

@@ -5,8 +5,8 @@ Every parameter of the marker-event scene lives here, with the paper's value as 
 optics, sec. 4.1 for 4 groups x 12 force levels). The YAML file in ``configs/`` repeats
 these defaults with a comment per key; a test keeps the two equal.
 
-:func:`load_scene_config` validates a whole file before any event is drawn: unknown keys are
-errors (every model forbids extra keys) and any problem becomes one
+:func:`load_marker_scene_config` validates a whole file before any event is drawn: unknown keys
+are errors (every model forbids extra keys) and any problem becomes one
 :class:`~tactile_cli.errors.InputError` naming the file, the line and the key.
 """
 
@@ -261,7 +261,7 @@ class StripsConfig(_Model):
     margin on each side along y."""
 
 
-class SceneConfig(_Model):
+class MarkerSceneConfig(_Model):
     """The whole marker-event scene."""
 
     bin_s: float = Field(default=BIN_S, gt=0, le=1)
@@ -295,7 +295,7 @@ class SceneConfig(_Model):
         return value
 
     @model_validator(mode="after")
-    def _cross_checks(self) -> SceneConfig:
+    def _cross_checks(self) -> MarkerSceneConfig:
         bad = sorted(k for k in self.saturation.alpha_over_limit if
                      not 1 <= k <= self.trials.n_levels)
         if bad:
@@ -311,7 +311,7 @@ class SceneConfig(_Model):
         return round(self.bin_s * 1e6)
 
     def with_overrides(self, *, groups: int | None = None,
-                       levels: list[int] | None = None) -> SceneConfig:
+                       levels: list[int] | None = None) -> MarkerSceneConfig:
         """A validated copy with ``trials.groups`` and/or ``trials.levels`` replaced."""
         trials = self.trials.model_dump()
         if groups is not None:
@@ -321,15 +321,15 @@ class SceneConfig(_Model):
         data = self.model_dump()
         data["trials"] = trials
         try:
-            return SceneConfig.model_validate(data)
+            return MarkerSceneConfig.model_validate(data)
         except ValidationError as exc:
             raise InputError(_describe(exc.errors()[0])) from None
 
 
-def load_scene_config(path: str | Path) -> SceneConfig:
+def load_marker_scene_config(path: str | Path) -> MarkerSceneConfig:
     """Read and validate a scene config file; any problem is one :class:`InputError` line
     naming the file, the line and the key."""
-    return load_yaml_model(path, SceneConfig, describe=_describe,
+    return load_yaml_model(path, MarkerSceneConfig, describe=_describe,
                            not_a_mapping="a scene config is a YAML mapping of sections "
                            "(trials, timing, fos, ...); see configs/scene_marker_events.yaml")
 
@@ -349,7 +349,7 @@ def _describe(err: dict[str, Any]) -> str:
 
 
 def _allowed_keys(loc: tuple[Any, ...]) -> list[str]:
-    model: Any = SceneConfig
+    model: Any = MarkerSceneConfig
     for part in loc:
         field = model.model_fields.get(part) if isinstance(part, str) else None
         annotation = None if field is None else field.annotation
@@ -359,6 +359,6 @@ def _allowed_keys(loc: tuple[Any, ...]) -> list[str]:
     return list(model.model_fields)
 
 
-__all__ = ["SceneConfig", "TrialsConfig", "TimingConfig", "FosConfig", "SaturationConfig",
-           "PolarityConfig", "NoiseConfig", "SensorConfig", "SlipConfig", "MarkersConfig",
-           "StripsConfig", "load_scene_config"]
+__all__ = ["FosConfig", "MarkerSceneConfig", "MarkersConfig", "NoiseConfig", "PolarityConfig",
+           "SaturationConfig", "SensorConfig", "SlipConfig", "StripsConfig", "TimingConfig",
+           "TrialsConfig", "load_marker_scene_config"]

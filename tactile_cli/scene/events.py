@@ -32,7 +32,7 @@ STRIP, MARKER, BACKGROUND_ON, BACKGROUND_OFF = 0, 1, 2, 3
 
 
 @dataclass(frozen=True)
-class TrialEvents:
+class SimulatedEvents:
     """events: (n,) :data:`EVENT_DTYPE` sorted by t; counts of each source."""
 
     events: np.ndarray
@@ -66,7 +66,7 @@ def strip_offset_px(t_s: np.ndarray, trial: SceneTrial) -> np.ndarray:
 
 
 def trial_events(trial: SceneTrial, rates: TrialRates, layout: SceneLayout,
-                 rng: np.random.Generator) -> TrialEvents:
+                 rng: np.random.Generator) -> SimulatedEvents:
     """Draw the events of one trial from ``rng`` (advances it)."""
     n_bins = rates.t_s.shape[0]
     bin_us = round(rates.bin_s * 1e6)
@@ -124,8 +124,8 @@ def trial_events(trial: SceneTrial, rates: TrialRates, layout: SceneLayout,
     events["x"] = x
     events["y"] = y
     events["p"] = p
-    return TrialEvents(events, n_strip=int(strip.size), n_marker=int(marker.size),
+    return SimulatedEvents(events, n_strip=int(strip.size), n_marker=int(marker.size),
                        n_background=int(k))
 
 
-__all__ = ["EVENT_DTYPE", "TrialEvents", "strip_offset_px", "trial_events"]
+__all__ = ["EVENT_DTYPE", "SimulatedEvents", "strip_offset_px", "trial_events"]

@@ -21,34 +21,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..spatial.roi import Roi
+
 if TYPE_CHECKING:
-    from .config import SceneConfig
+    from .config import MarkerSceneConfig
 
 
 def slip_px_per_m(*, focal_length_m: float, strip_distance_m: float,
                   pixel_pitch_m: float) -> float:
     """Pixels of image motion per metre of strip travel, ``2 f / (delta * pitch)`` (eq. 15)."""
     return 2.0 * focal_length_m / (strip_distance_m * pixel_pitch_m)
-
-
-@dataclass(frozen=True)
-class Roi:
-    """A rectangular region of interest, half-open: ``x0_px <= x < x1_px``,
-    ``y0_px <= y < y1_px`` (pixels)."""
-
-    name: str
-    x0_px: int
-    y0_px: int
-    x1_px: int
-    y1_px: int
-
-    def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """(n,) bool: which pixels ``(x, y)`` lie inside."""
-        return (x >= self.x0_px) & (x < self.x1_px) & (y >= self.y0_px) & (y < self.y1_px)
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "x0_px": self.x0_px, "y0_px": self.y0_px,
-                "x1_px": self.x1_px, "y1_px": self.y1_px}
 
 
 @dataclass(frozen=True)
@@ -81,7 +63,7 @@ class SceneLayout:
         }
 
 
-def scene_layout(config: SceneConfig) -> SceneLayout:
+def scene_layout(config: MarkerSceneConfig) -> SceneLayout:
     """The geometry of ``config``; raises ValueError naming the key when a marker or an
     ROI leaves the sensor or a marker overlaps an ROI."""
     s = config.sensor
@@ -130,4 +112,4 @@ def scene_layout(config: SceneConfig) -> SceneLayout:
                        st.band_height_px, px_per_m, tuple(rois))
 
 
-__all__ = ["Roi", "SceneLayout", "scene_layout", "slip_px_per_m"]
+__all__ = ["SceneLayout", "scene_layout", "slip_px_per_m"]

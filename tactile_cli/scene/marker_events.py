@@ -43,7 +43,7 @@ from ..progress import NullProgress, Progress
 from ..store.origin import DATASET_LABEL, ORIGIN_LABEL
 from ..store.outdir import check_output_folder, output_folder
 from ..store.provenance import current_command
-from .config import SceneConfig
+from .config import MarkerSceneConfig
 from .events import EVENT_DTYPE, trial_events
 from .layout import SceneLayout, scene_layout
 from .trials import SceneTrial, draw_trial, expected_rates, trial_rng
@@ -104,7 +104,7 @@ class SceneResult:
 
 
 def simulate_marker_events(
-    config: SceneConfig,
+    config: MarkerSceneConfig,
     out_dir: str | Path,
     *,
     seed: int,
@@ -199,7 +199,7 @@ def _annotations_csv(trials: Sequence[SceneTrial]) -> str:
     return _table(ANNOTATION_COLUMNS, rows)
 
 
-def _scene_json(config: SceneConfig, layout: SceneLayout, seed: int, command: str,
+def _scene_json(config: MarkerSceneConfig, layout: SceneLayout, seed: int, command: str,
                 written: Sequence[SimulatedTrial]) -> dict[str, Any]:
     s = config.sensor
     return {

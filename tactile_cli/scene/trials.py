@@ -23,7 +23,7 @@ from ..fos.actions import (
     expected_net_counts,
     saturate,
 )
-from .config import SceneConfig
+from .config import MarkerSceneConfig
 from .layout import slip_px_per_m
 
 
@@ -99,7 +99,7 @@ def _ms(range_s: tuple[float, float], rng: np.random.Generator) -> int:
     return int(rng.integers(lo, max(lo, hi) + 1))
 
 
-def draw_trial(config: SceneConfig, group: int, level: int,
+def draw_trial(config: MarkerSceneConfig, group: int, level: int,
                rng: np.random.Generator) -> SceneTrial:
     """Draw the ground truth of trial (group, level) from ``rng`` (advances it)."""
     tm, fos = config.timing, config.fos
@@ -146,14 +146,14 @@ def draw_trial(config: SceneConfig, group: int, level: int,
     )
 
 
-def plan_trials(config: SceneConfig, *, seed: int) -> list[SceneTrial]:
+def plan_trials(config: MarkerSceneConfig, *, seed: int) -> list[SceneTrial]:
     """The ground truth of every trial of the scene, groups outer, levels inner (the same
     values :func:`~tactile_cli.scene.simulate_marker_events` uses)."""
     return [draw_trial(config, g, k, trial_rng(seed, g, k))
             for g in range(1, config.trials.groups + 1) for k in config.trials.selected_levels]
 
 
-def expected_rates(trial: SceneTrial, config: SceneConfig) -> TrialRates:
+def expected_rates(trial: SceneTrial, config: MarkerSceneConfig) -> TrialRates:
     """Expected events per bin of ``trial``: eqs. 16-17 via
     :func:`~tactile_cli.fos.actions.expected_net_counts`, saturated, split by polarity."""
     t_s = bin_centres_s(trial.timeline.end_s, config.bin_s)

@@ -17,6 +17,10 @@ from .frames import median_filter_frames as median_filter_frames
 from .optics import PAPER_FOCAL_LENGTH_M as PAPER_FOCAL_LENGTH_M
 from .optics import PAPER_PIXEL_PITCH_M as PAPER_PIXEL_PITCH_M
 from .optics import StripOptics as StripOptics
+from .pipeline import FramesResult as FramesResult
+from .pipeline import SlipRateReport as SlipRateReport
+from .pipeline import slip_rate_report as slip_rate_report
+from .pipeline import write_frames as write_frames
 from .roi import Roi as Roi
 from .roi import RoiCentroids as RoiCentroids
 from .roi import centroids_from_sums as centroids_from_sums

@@ -12,10 +12,15 @@ and every YAML file use these keys (``configs/rois_marker_scene.yaml`` is an exa
       strip_distance_m: 0.02
     rois:                                          # px, half-open: x0 <= x < x1;
                                                    # none: proposed per trial
-      - {name: strip_1, x0: 100, y0: 150, x1: 160, y1: 330}
+      - {name: strip_1, x0_px: 100, y0_px: 150, x1_px: 160, y1_px: 330}
     centroid: {polarity: positive, median: 1, bin_s: 0.02,   # optional (these defaults)
                background: auto}           # approach | none | auto (approach if median 1)
     slip: {edge_trim_s: 0.1}                                 # optional (this default)
+
+An ROI's corners are ``x0_px``, ``y0_px``, ``x1_px``, ``y1_px`` (the fields of
+:class:`~tactile_cli.spatial.roi.Roi`, what ``Roi.as_dict`` and a scene's ``scene.json``
+write); configs written before the unit was in the names say ``x0``, ``y0``, ``x1``, ``y1``,
+read the same way (one spelling per ROI).
 
 Every key is checked before any event is read; an unknown key, a wrong type or a missing
 required key is one :class:`InputError` naming the file and the key.
@@ -23,13 +28,12 @@ required key is one :class:`InputError` naming the file and the key.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..config_file import parse_yaml, read_config_text
+from ..config_file import parse_json, parse_yaml, read_config_text
 from ..errors import InputError
 from ..vocabulary import BIN_S
 from .frames import _check_median
@@ -113,7 +117,9 @@ class SpatialConfig:
 _TOP_KEYS = ("version", "sensor", "optics", "rois", "centroid", "slip")
 _SENSOR_KEYS = ("width_px", "height_px")
 _OPTICS_KEYS = ("pixel_pitch_m", "focal_length_m", "strip_distance_m")
-_ROI_KEYS = ("name", "x0", "y0", "x1", "y1")
+_ROI_KEYS = ("name", "x0_px", "y0_px", "x1_px", "y1_px")
+#: the corners' spelling in configs written before the unit was in the names
+_ROI_KEYS_UNITLESS = ("name", "x0", "y0", "x1", "y1")
 _CENTROID_KEYS = ("polarity", "median", "bin_s", "background")
 BACKGROUNDS = ("auto", "approach", "none")
 _SLIP_KEYS = ("edge_trim_s",)
@@ -179,12 +185,14 @@ def config_from_mapping(raw: Any, *, path: str | Path = "<config>") -> SpatialCo
         optics = StripOptics(*(c.number(o[k], f"optics.{k}", maximum=MAX_OPTICS_M)
                                for k in _OPTICS_KEYS))
     if "rois" in raw and (not isinstance(raw["rois"], list) or not raw["rois"]):
-        raise c.fail("`rois` must be a non-empty list of {name, x0, y0, x1, y1}")
+        raise c.fail("`rois` must be a non-empty list of {name, x0_px, y0_px, x1_px, y1_px}")
     rois = []
     for i, item in enumerate(raw.get("rois") or []):
         key = f"rois[{i}]"
-        r = c.mapping(item, key, _ROI_KEYS, required=_ROI_KEYS)
-        coords = [c.integer(r[k], f"{key}.{k}") for k in _ROI_KEYS[1:]]
+        unitless = isinstance(item, dict) and "x0" in item and "x0_px" not in item
+        keys = _ROI_KEYS_UNITLESS if unitless else _ROI_KEYS
+        r = c.mapping(item, key, keys, required=keys)
+        coords = [c.integer(r[k], f"{key}.{k}") for k in keys[1:]]
         try:
             rois.append(Roi(str(r["name"]), *coords))
         except ValueError as exc:
@@ -254,8 +262,7 @@ def scene_mapping(raw: dict[str, Any], path: str | Path) -> dict[str, Any]:
                                           ("name", "x0_px", "y0_px", "x1_px", "y1_px")):
             raise InputError(f"scene.json: `rois[{i}]` needs name, x0_px, y0_px, x1_px, y1_px",
                              path=path)
-        out_rois.append({"name": r["name"], "x0": r["x0_px"], "y0": r["y0_px"],
-                         "x1": r["x1_px"], "y1": r["y1_px"]})
+        out_rois.append({k: r[k] for k in _ROI_KEYS})
     return {
         "sensor": {"width_px": sensor["width_px"], "height_px": sensor["height_px"]},
         "optics": {k: sensor[k] for k in ("pixel_pitch_m", "focal_length_m",
@@ -272,11 +279,7 @@ def load_config(path: str | Path) -> SpatialConfig:
         raise InputError("config file not found", path=path)
     text = read_config_text(path)
     if path.suffix.lower() == ".json":
-        try:
-            raw = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputError(f"not valid JSON ({exc.msg} at line {exc.lineno})",
-                             path=path) from None
+        raw = parse_json(text, path)  # nesting bounded: never a RecursionError
         if not isinstance(raw, dict):
             raise InputError("a JSON config is a JSON object", path=path)
         if raw.get("format") == SCENE_FORMAT:

@@ -104,7 +104,7 @@ def contact_sheet(
     for ax, (t_s, rgb) in zip(axes.ravel(), frames, strict=False):
         ax.imshow(rgb, interpolation="nearest")
         for r in rois:
-            ax.add_patch(Rectangle((r.x0 - 0.5, r.y0 - 0.5), r.width_px, r.height_px,
+            ax.add_patch(Rectangle((r.x0_px - 0.5, r.y0_px - 0.5), r.width_px, r.height_px,
                                    fill=False, edgecolor="#00bfff", linewidth=0.8))
         ax.set_title(f"{t_s:.3f}-{t_s + window_s:.3f} s", fontsize=7)
     if title:

@@ -1,7 +1,7 @@
 """Regions of interest and their event-weighted centroids (paper 000, sec. 5.2, eqs. 18-19).
 
 - :class:`Roi`: a rectangle on the sensor grid (eq. 18, the set of pixels between its
-  corners), half-open in px: ``x0 <= x < x1``, ``y0 <= y < y1``.
+  corners), half-open in px: ``x0_px <= x < x1_px``, ``y0_px <= y < y1_px``.
 - :func:`propose_rois`: rectangles around the dense blobs of an event-density image, so a
   new sensor's strips can be found from one press instead of by hand.
 - :func:`roi_centroids`: eq. 19, ``x_bar = sum x I(x, y) / sum I(x, y)`` (and ``y_bar``)
@@ -37,47 +37,51 @@ CHUNK_BINS = 50
 
 @dataclass(frozen=True)
 class Roi:
-    """A rectangular region of interest in px, half-open: ``x0 <= x < x1``, ``y0 <= y < y1``."""
+    """A rectangular region of interest on the sensor grid, half-open, in px:
+    ``x0_px <= x < x1_px``, ``y0_px <= y < y1_px``. The one ROI of the toolkit: the scene's
+    strip ROIs (:mod:`tactile_cli.scene.layout`), the configs' (whose YAML keys are ``x0``,
+    ``y0``, ``x1``, ``y1``) and the proposed ones."""
 
     name: str
-    x0: int
-    y0: int
-    x1: int
-    y1: int
+    x0_px: int
+    y0_px: int
+    x1_px: int
+    y1_px: int
 
     def __post_init__(self) -> None:
-        for key in ("x0", "y0", "x1", "y1"):
+        for key in ("x0_px", "y0_px", "x1_px", "y1_px"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int | np.integer):
                 raise ValueError(f"ROI {self.name!r}: `{key}` (={value!r}) must be a whole "
                                  "number of px")
-        if self.x1 <= self.x0 or self.y1 <= self.y0:
-            raise ValueError(f"ROI {self.name!r}: needs x0 < x1 and y0 < y1 (got x {self.x0}.."
-                             f"{self.x1}, y {self.y0}..{self.y1})")
+        if self.x1_px <= self.x0_px or self.y1_px <= self.y0_px:
+            raise ValueError(f"ROI {self.name!r}: needs x0 < x1 and y0 < y1 (got x "
+                             f"{self.x0_px}.."
+                             f"{self.x1_px}, y {self.y0_px}..{self.y1_px})")
 
     @property
     def width_px(self) -> int:
-        return self.x1 - self.x0
+        return self.x1_px - self.x0_px
 
     @property
     def height_px(self) -> int:
-        return self.y1 - self.y0
+        return self.y1_px - self.y0_px
 
     @property
     def centre_px(self) -> tuple[float, float]:
         """Pixel-centre coordinates of the rectangle's middle, (x, y)."""
-        return (self.x0 + self.x1 - 1) / 2, (self.y0 + self.y1 - 1) / 2
+        return (self.x0_px + self.x1_px - 1) / 2, (self.y0_px + self.y1_px - 1) / 2
 
     def contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """(n,) bool: which of the pixels (x, y) lie inside."""
-        return (x >= self.x0) & (x < self.x1) & (y >= self.y0) & (y < self.y1)
+        return (x >= self.x0_px) & (x < self.x1_px) & (y >= self.y0_px) & (y < self.y1_px)
 
     def as_dict(self) -> dict[str, int | str]:
-        return {"name": self.name, "x0": int(self.x0), "y0": int(self.y0),
-                "x1": int(self.x1), "y1": int(self.y1)}
+        return {"name": self.name, "x0_px": int(self.x0_px), "y0_px": int(self.y0_px),
+                "x1_px": int(self.x1_px), "y1_px": int(self.y1_px)}
 
     def __str__(self) -> str:
-        return f"{self.name} (x {self.x0}..{self.x1}, y {self.y0}..{self.y1})"
+        return f"{self.name} (x {self.x0_px}..{self.x1_px}, y {self.y0_px}..{self.y1_px})"
 
 
 def check_rois_on_sensor(rois: Sequence[Roi], width_px: int, height_px: int, *,
@@ -85,14 +89,14 @@ def check_rois_on_sensor(rois: Sequence[Roi], width_px: int, height_px: int, *,
     """Raise :class:`InputError` when an ROI is not wholly on the ``width_px`` x
     ``height_px`` grid, or when there is none or two share a name."""
     if not rois:
-        raise InputError("no ROIs given; list them under `rois:` (name, x0, y0, x1, y1)",
-                         path=source)
+        raise InputError("no ROIs given; list them under `rois:` (name, x0_px, y0_px, x1_px, "
+                         "y1_px)", path=source)
     names = [r.name for r in rois]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise InputError(f"ROI names must be unique; repeated: {', '.join(dup)}", path=source)
     for r in rois:
-        if r.x0 < 0 or r.y0 < 0 or r.x1 > width_px or r.y1 > height_px:
+        if r.x0_px < 0 or r.y0_px < 0 or r.x1_px > width_px or r.y1_px > height_px:
             raise InputError(f"ROI {r} lies outside the {width_px}x{height_px} px sensor; "
                              f"keep 0 <= x0 < x1 <= {width_px} and 0 <= y0 < y1 <= {height_px}",
                              path=source)
@@ -124,16 +128,17 @@ def _roi_sums(
         ], axis=1)
     # the filter needs the pixels around the ROI: crop with a margin, filter, trim back
     m = median // 2
-    cx0, cy0 = max(0, roi.x0 - m), max(0, roi.y0 - m)
-    cx1, cy1 = min(width_px, roi.x1 + m), min(height_px, roi.y1 + m)
+    cx0, cy0 = max(0, roi.x0_px - m), max(0, roi.y0_px - m)
+    cx1, cy1 = min(width_px, roi.x1_px + m), min(height_px, roi.y1_px + m)
     w, h = cx1 - cx0, cy1 - cy0
     inside = (x >= cx0) & (x < cx1) & (y >= cy0) & (y < cy1)
     code = (k[inside] * h + (y[inside] - cy0)) * w + (x[inside] - cx0)
     crop = np.bincount(code, minlength=n_bins * h * w).reshape(n_bins, h, w)
     crop = median_filter_frames(crop.astype(np.int32), median)
-    sub = crop[:, roi.y0 - cy0: roi.y1 - cy0, roi.x0 - cx0: roi.x1 - cx0].astype(np.float64)
-    xs = np.arange(roi.x0, roi.x1, dtype=np.float64)
-    ys = np.arange(roi.y0, roi.y1, dtype=np.float64)
+    sub = crop[:, roi.y0_px - cy0: roi.y1_px - cy0,
+               roi.x0_px - cx0: roi.x1_px - cx0].astype(np.float64)
+    xs = np.arange(roi.x0_px, roi.x1_px, dtype=np.float64)
+    ys = np.arange(roi.y0_px, roi.y1_px, dtype=np.float64)
     return np.stack([sub.sum(axis=(1, 2)), sub.sum(axis=1) @ xs, sub.sum(axis=2) @ ys], axis=1)
 
 
@@ -256,8 +261,8 @@ def drop_outside(centroid: np.ndarray, weight: np.ndarray, rois: Sequence[Roi]
     lies outside its ROI made NaN and its weight 0 (new arrays). Events inside an ROI cannot
     have their centroid outside it; after a background subtraction a bin whose remainder
     is mostly noise can, and then it is no centroid."""
-    lo = np.array([[r.x0, r.y0] for r in rois], dtype=np.float64)
-    hi = np.array([[r.x1 - 1, r.y1 - 1] for r in rois], dtype=np.float64)
+    lo = np.array([[r.x0_px, r.y0_px] for r in rois], dtype=np.float64)
+    hi = np.array([[r.x1_px - 1, r.y1_px - 1] for r in rois], dtype=np.float64)
     with np.errstate(invalid="ignore"):
         outside = ((centroid < lo) | (centroid > hi)).any(axis=-1)
     centroid = np.where(outside[..., None], np.nan, centroid)
@@ -280,8 +285,8 @@ def subtract_background(sums: np.ndarray, rois: Sequence[Roi], per_px: float) ->
     becomes NaN instead of the ratio of two noise terms, which lands anywhere (an ROI with
     1.3 background events per bin and 0.05 events left gave centroids 40,000 px away)."""
     expected = np.array([[r.width_px * r.height_px,
-                          r.height_px * (r.x0 + r.x1 - 1) * r.width_px / 2,
-                          r.width_px * (r.y0 + r.y1 - 1) * r.height_px / 2] for r in rois],
+                          r.height_px * (r.x0_px + r.x1_px - 1) * r.width_px / 2,
+                          r.width_px * (r.y0_px + r.y1_px - 1) * r.height_px / 2] for r in rois],
                         dtype=np.float64).reshape(len(rois), 3)
     out = sums - per_px * expected[None]
     noise = np.sqrt(per_px * expected[:, 0])  # (n_rois,) Poisson sd of the ROI's background

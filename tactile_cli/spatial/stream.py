@@ -213,7 +213,7 @@ def _check_config(config: SpatialConfig) -> None:
 def write_centroid_file(
     path: str | Path,
     out: str | Path,
-    config: SpatialConfig,
+    config: SpatialConfig | str | Path,
     *,
     trials: Sequence[str] | None = None,
     command: str | None = None,
@@ -226,14 +226,29 @@ def write_centroid_file(
 
     Each output trial keeps the source trial's name, labels, split and annotations and has
     ``signals/roi_centroids`` with ``sample_labels/action`` (from the annotations; absent
-    for a trial without them). ``provenance`` is stored as the root's ``config_json``; the
-    source file is recorded with its SHA-256. Raises :class:`InputError` for an unknown
-    trial, a config without ROIs or for another sensor size, and a file without event
-    trials.
+    for a trial without them). ``config``: the ROI config, or the path of its YAML file or
+    of a scene's scene.json. ``provenance`` is stored as the root's ``config_json``
+    (default: the config, the trials and every input with its SHA-256); the source file
+    is recorded with its SHA-256. Raises :class:`InputError` before any work for an
+    output that is an input or cannot be written, an unknown trial, a config without ROIs
+    or for another sensor size, and a file without event trials.
     """
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+    from ..store.provenance import provenance_record
     from ..vocabulary import ACTIONS
+    from .pipeline import config_source
 
     path = Path(path)
+    if not path.is_file():
+        raise InputError("file not found", path=path)
+    check_outputs({"out": out}, [path] + ([] if isinstance(config, SpatialConfig)
+                                          else [config]))
+    check_output_file(out, overwrite=overwrite)
+    config, config_files = config_source(config)
+    if provenance is None:
+        provenance = provenance_record([path, *config_files], {
+            "rois": config.as_dict(), "trials": list(trials) if trials else "all"})
     _check_config(config)
     with TactileFile(path) as src:
         names = event_trial_names(src)

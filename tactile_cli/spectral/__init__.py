@@ -42,12 +42,13 @@ from ._tracking import FrameSettings as FrameSettings
 from ._tracking import FrameSpectra as FrameSpectra
 from ._tracking import SpectrumTracker as SpectrumTracker
 from ._tracking import band_peak as band_peak
+from ._tracking import causal_moving_average as causal_moving_average
 from ._tracking import frame_spectra as frame_spectra
-from ._tracking import moving_average as moving_average
 
 __all__ = ["STFT_LENGTHS", "FrameSettings", "FrameSpectra", "SpectrumTracker", "band_peak",
-           "frame_spectra", "moving_average", "band_power", "bandwidth_steps", "limit_bandwidth",
-           "spectral_centroid", "spectrogram", "stft_hop", "stft_lengths", "welch_psd"]
+           "frame_spectra", "causal_moving_average", "band_power", "bandwidth_steps",
+           "limit_bandwidth", "spectral_centroid", "spectrogram", "stft_hop", "stft_lengths",
+           "welch_psd"]
 __all__ += ["band_sums", "coherence_matrix", "cross_spectral_matrix", "g2_noise_floor",
             "group_square_coherence", "group_square_coherence_bins",
             "group_square_coherence_windows", "local_ensemble_power",

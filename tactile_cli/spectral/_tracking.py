@@ -9,7 +9,7 @@ in one frequency band, the peak amplitude (contact with an object) or the peak f
   uses samples from its future);
 - :func:`band_peak`: the peak amplitude and the peak frequency (parabolic interpolation
   between bins) in a band of each frame;
-- :func:`moving_average`: the causal trailing mean;
+- :func:`causal_moving_average`: the causal trailing mean;
 - :class:`SpectrumTracker`: the same frames from samples pushed in chunks of any size
   (``tactile detect-contact --follow``); frame for frame equal to :func:`frame_spectra`.
 """
@@ -131,7 +131,7 @@ def band_peak(magnitude: np.ndarray, f_hz: np.ndarray, band_hz: tuple[float, flo
     return amplitude, f[centre] + shift * (f[1] - f[0])
 
 
-def moving_average(x: np.ndarray, n: int) -> np.ndarray:
+def causal_moving_average(x: np.ndarray, n: int) -> np.ndarray:
     """Causal trailing mean of the last ``n`` values of (n_values,) ``x`` (fewer at the
     start), so that the value at k uses nothing after k."""
     if n < 1:

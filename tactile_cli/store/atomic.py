@@ -77,10 +77,17 @@ def process_alive(pid: int) -> bool:
     return stat.rpartition(")")[2].split()[:1] != ["Z"]
 
 
+def _named(out: Path) -> Path:
+    """``out``, or for ``.`` and ``..`` the absolute path of that folder: its temporary
+    siblings go beside it, under its own name."""
+    return Path(os.path.abspath(out)) if out.name in ("", ".", "..") else out
+
+
 def temporary_path(out: Path, *, kind: str = "tmp", keep_suffix: bool = False) -> Path:
     """``.<name>.<kind>-<pid>`` beside ``out`` (``kind``: ``tmp`` for results being built,
     ``old`` for a replaced target on its way out); ``keep_suffix`` appends ``out``'s suffix
     for libraries that choose a format by it."""
+    out = _named(out)
     suffix = out.suffix if keep_suffix else ""
     return out.with_name(f".{out.name}.{kind}-{os.getpid()}{suffix}")
 
@@ -88,6 +95,7 @@ def temporary_path(out: Path, *, kind: str = "tmp", keep_suffix: bool = False) -
 def remove_stale_temporaries(out: Path) -> None:
     """Delete temporary siblings of ``out`` left by killed writers (SIGKILL, power loss):
     ``.<name>.tmp-<pid>[.ext]`` and ``.<name>.old-<pid>`` whose process is gone."""
+    out = _named(Path(out))
     prefix = f".{out.name}."
     try:
         siblings = list(out.parent.glob(f".{out.name}.*-*"))

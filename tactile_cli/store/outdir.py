@@ -92,12 +92,12 @@ def _make_parents(folder: Path) -> list[Path]:
 
 
 def _move_into_place(tmp: Path, out: Path, *, overwrite: bool, merge: bool) -> None:
-    if not out.exists() or (out.is_dir() and not any(out.iterdir())):
-        swap_into_place(tmp, out)
-    elif merge:
+    if merge and out.is_dir():  # entry by entry, never over the folder (it may be `.`)
         for entry in sorted(tmp.iterdir()):
             swap_into_place(entry, out / entry.name)
         tmp.rmdir()
+    elif not out.exists() or (out.is_dir() and not any(out.iterdir())):
+        swap_into_place(tmp, out)
     elif overwrite:
         swap_into_place(tmp, out)
     else:  # appeared while we worked

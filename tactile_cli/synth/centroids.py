@@ -155,7 +155,7 @@ def floored_uniform_moments(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray,
 def rest_y_px(rois: Sequence[Roi], inset_px: np.ndarray, direction_y: int) -> np.ndarray:
     """(n_rois,) band centre at rest: ``inset_px`` inside the edge the slip moves away
     from (the bottom edge ``y1`` when the strips move to smaller y)."""
-    edge = np.array([r.y1 if direction_y < 0 else r.y0 for r in rois], dtype=np.float64)
+    edge = np.array([r.y1_px if direction_y < 0 else r.y0_px for r in rois], dtype=np.float64)
     return edge + direction_y * np.asarray(inset_px, dtype=np.float64)
 
 
@@ -199,8 +199,8 @@ def draw_centroids(
                             velocity_px_s=cfg.direction_y * speed_px_s,
                             tau_return_s=tau_press_s).mean(axis=1)
     band_y = rest[None, :] + offset[:, None]  # (n_bins, n_rois)
-    y0 = np.array([r.y0 for r in rois], dtype=np.float64)
-    y1 = np.array([r.y1 for r in rois], dtype=np.float64)
+    y0 = np.array([r.y0_px for r in rois], dtype=np.float64)
+    y1 = np.array([r.y1_px for r in rois], dtype=np.float64)
     lo = np.maximum(band_y - band_h / 2, y0)
     hi = np.minimum(band_y + band_h / 2, y1)
     inside = np.clip(hi - lo, 0.0, None)  # px of the band within the ROI
@@ -225,8 +225,8 @@ def draw_centroids(
     n_bg = rng.poisson(np.broadcast_to(bg_rate, (n_bins, n_rois)))
     cell = np.repeat(np.arange(n_bins * n_rois), n_bg.ravel())
     roi_of = cell % n_rois
-    lo_x = np.array([r.x0 for r in rois])[roi_of]
-    lo_y = np.array([r.y0 for r in rois])[roi_of]
+    lo_x = np.array([r.x0_px for r in rois])[roi_of]
+    lo_y = np.array([r.y0_px for r in rois])[roi_of]
     bx = lo_x + rng.integers(0, np.array([r.width_px for r in rois])[roi_of])
     by = lo_y + rng.integers(0, np.array([r.height_px for r in rois])[roi_of])
     size = n_bins * n_rois

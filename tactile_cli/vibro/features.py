@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spectral import moving_average
+from ..spectral import causal_moving_average
 
 
 @dataclass(frozen=True)
@@ -104,7 +104,7 @@ def threshold_trigger(t_s: np.ndarray, values: np.ndarray, *, calibration_s: flo
     scale = abs(reference) if relative and reference != 0 else 1.0
     dev = (x - reference) / scale
     noise = float(np.abs(dev[cal]).mean())
-    level = np.abs(moving_average(x, average) - reference) / scale
+    level = np.abs(causal_moving_average(x, average) - reference) / scale
     thr = float(factor * noise) if factor is not None else float(threshold)  # type: ignore[arg-type]
     on = (level > thr) & ~cal
     return Trigger(t, x, level, reference, noise, thr, on, events_from(t, on, merge_s))

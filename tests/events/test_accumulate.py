@@ -11,8 +11,8 @@ from tactile_cli.events import (
     CHANNELS,
     EventCounts,
     bin_events,
+    centred_moving_average,
     counts_to_labels,
-    moving_average,
     trial_counts,
 )
 from tactile_cli.events import accumulate as acc_module
@@ -125,22 +125,22 @@ def naive_moving_average(x, w):
 
 @pytest.mark.parametrize("window", [1, 3, 5, 7, 21])
 @pytest.mark.parametrize("n", [1, 2, 6, 50])
-def test_moving_average_matches_a_naive_loop(window, n):
+def test_centred_moving_average_matches_a_naive_loop(window, n):
     x = np.random.default_rng(n).normal(size=n) * 100
-    np.testing.assert_allclose(moving_average(x, window), naive_moving_average(x, window),
+    np.testing.assert_allclose(centred_moving_average(x, window), naive_moving_average(x, window),
                                rtol=1e-12, atol=1e-9)
 
 
-def test_moving_average_is_centred_unbiased_and_works_per_column():
+def test_centred_moving_average_is_unbiased_and_works_per_column():
     line = np.arange(30, dtype=float) * 3 + 7  # a straight line is its own centred average
-    np.testing.assert_allclose(moving_average(line, 5), line)
+    np.testing.assert_allclose(centred_moving_average(line, 5), line)
     two = np.stack([line, -2 * line], axis=1)
-    np.testing.assert_allclose(moving_average(two, 7), two)
-    assert moving_average(np.zeros(0), 5).shape == (0,)
+    np.testing.assert_allclose(centred_moving_average(two, 7), two)
+    assert centred_moving_average(np.zeros(0), 5).shape == (0,)
     with pytest.raises(ValueError, match="must be an odd whole number >= 1"):
-        moving_average(line, 4)
+        centred_moving_average(line, 4)
     with pytest.raises(ValueError, match="must be an odd whole number >= 1"):
-        moving_average(line, 0)
+        centred_moving_average(line, 0)
 
 
 def _write_event_file(path, trials, *, origin=None):

@@ -59,11 +59,11 @@ def make_strip_events(
     for roi in rois:
         n = rng.poisson(strip_rate_hz * (slip_s[1] - press_s[0]))
         t = rng.uniform(press_s[0], slip_s[1], n)
-        y_rest = roi.y1 - 20.0 if direction < 0 else roi.y0 + 20.0
+        y_rest = roi.y1_px - 20.0 if direction < 0 else roi.y0_px + 20.0
         centre = y_rest + direction * v_px * np.clip(t - slip_s[0], 0, None)
         y = centre + rng.uniform(-band_px / 2, band_px / 2, n)
-        x = rng.uniform(roi.x0 + 2, roi.x1 - 2, n)
-        keep = (y >= roi.y0) & (y < roi.y1)
+        x = rng.uniform(roi.x0_px + 2, roi.x1_px - 2, n)
+        keep = (y >= roi.y0_px) & (y < roi.y1_px)
         xs.append(x[keep])
         ys.append(y[keep])
         ts.append(t[keep])

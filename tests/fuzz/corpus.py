@@ -900,7 +900,7 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         case(d, "grade", ["grade", "{BASE}/grade_table.csv", "--config", "{IN}", "--json"],
              REFUSE)
     for mutation, apply in _yaml_mutations([
-            ("rois.0.x1", "-10"), ("rois.0.x0", "100000"), ("sensor.width_px", "0"),
+            ("rois.0.x1_px", "-10"), ("rois.0.x0_px", "100000"), ("sensor.width_px", "0"),
             ("optics.pixel_pitch_m", "-1"), ("optics.focal_length_m", "0"),
             ("centroid.polarity", "sideways"), ("rois", "[]")]):
         d = add("rois", cfg / "rois_marker_scene.yaml", "rois.yaml", mutation, "config", apply)
@@ -1025,6 +1025,9 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         case(d, command, [a if a not in ("{RUN}",) else "{IN}" for a in argv], REFUSE)
 
     add_chain_cases(add, case, base, rng)
+    from .outputs import add_output_cases
+
+    add_output_cases(add, case, base)
 
     if fresh:
         (corpus_dir / ".complete").write_text("ok\n")

@@ -220,6 +220,9 @@ def run_case(corpus: Corpus, case: Case, scratch: Path, *, timeout_s: int = 120)
             case.command == "fit-fos" and "--no-write" not in argv)
         # the input itself, so that what a command may add beside it (RUN/eval) is skipped
         watched = [inp] + ([run_copy] if run_copy.exists() else [])
+        # and every valid input of the bases the case names: never written either
+        watched += sorted({Path(a) for a in argv if a.startswith(str(corpus.base))
+                           and Path(a).exists()})
         before = [tree_hash(p) for p in watched]
         before_skip = [tree_hash(p, ("eval", "perturb")) for p in watched]
         listing = _listing(out)

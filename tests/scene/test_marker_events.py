@@ -22,9 +22,9 @@ from tactile_cli.fos.actions import expected_net_counts
 from tactile_cli.ingest.sidecars import number_or_text
 from tactile_cli.scene import (
     EVENT_DTYPE,
-    SceneConfig,
+    MarkerSceneConfig,
     expected_rates,
-    load_scene_config,
+    load_marker_scene_config,
     plan_trials,
     scene_layout,
     simulate_marker_events,
@@ -38,8 +38,8 @@ runner = CliRunner()
 SEED = 7
 
 
-def _config(levels: list[int], groups: int = 1) -> SceneConfig:
-    return SceneConfig().with_overrides(groups=groups, levels=levels)
+def _config(levels: list[int], groups: int = 1) -> MarkerSceneConfig:
+    return MarkerSceneConfig().with_overrides(groups=groups, levels=levels)
 
 
 def _read_csv(path: Path) -> list[dict[str, str]]:
@@ -48,7 +48,7 @@ def _read_csv(path: Path) -> list[dict[str, str]]:
 
 
 @pytest.fixture(scope="module")
-def scene(tmp_path_factory) -> tuple[SceneConfig, Path]:
+def scene(tmp_path_factory) -> tuple[MarkerSceneConfig, Path]:
     """Levels 1, 6, 12 of group 1 (level 12 saturates by default)."""
     config = _config([1, 6, 12])
     out = tmp_path_factory.mktemp("scene") / "scene"
@@ -65,11 +65,11 @@ def _binned(events: np.ndarray, bin_us: int, n_bins: int) -> dict[str, np.ndarra
 
 # -- config ---------------------------------------------------------------------------------
 def test_config_file_repeats_the_built_in_defaults():
-    assert load_scene_config(CONFIG) == SceneConfig()
+    assert load_marker_scene_config(CONFIG) == MarkerSceneConfig()
 
 
 def test_default_config_has_the_papers_values():
-    c = SceneConfig()
+    c = MarkerSceneConfig()
     assert (c.trials.groups, c.trials.n_levels) == (4, 12)
     assert c.fos.alpha_press_range == (1365.0, 2280.0)
     assert (c.fos.tau_press_s, c.fos.alpha_slip, c.fos.tau_slip_s) == (0.3, 1615.0, 0.325)
@@ -83,7 +83,7 @@ def test_unknown_config_key_names_the_key_file_and_line(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("fos:\n  tau_press_s: 0.3\n  alpha_slp: 1600\n")
     with pytest.raises(InputError) as err:
-        load_scene_config(bad)
+        load_marker_scene_config(bad)
     assert str(err.value).startswith(f"{bad}, line 3: unknown key `fos.alpha_slp` "
                                      "(allowed here: alpha_press_range,")
 
@@ -92,20 +92,20 @@ def test_geometry_error_names_the_key(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("strips:\n  rest_y_px: 100\n")
     with pytest.raises(InputError, match=r"strips: the strip ROIs span y -219\.\.125 px"):
-        load_scene_config(bad)
+        load_marker_scene_config(bad)
 
 
 def test_press_duration_must_fit_the_press_region(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("timing:\n  press_duration_s: [0.3, 1.2]\n")
     with pytest.raises(InputError, match="`timing`: `press_duration_s` high"):
-        load_scene_config(bad)
+        load_marker_scene_config(bad)
 
 
 # -- ground truth ---------------------------------------------------------------------------
 def test_alpha_levels_spread_evenly_and_speeds_cover_every_group():
-    config = SceneConfig().model_copy(update={
-        "fos": SceneConfig().fos.model_copy(update={"alpha_press_jitter_rel": 0.0})})
+    config = MarkerSceneConfig().model_copy(update={
+        "fos": MarkerSceneConfig().fos.model_copy(update={"alpha_press_jitter_rel": 0.0})})
     trials = plan_trials(config, seed=0)
     assert len(trials) == 48
     alphas = [t.params.alpha_press for t in trials if t.group == 1]
@@ -236,7 +236,7 @@ def test_annotations_and_trials_csv_agree(scene):
     assert [r["name"] for r in scene_json["rois"]] == ["strip1", "strip2", "strip3", "strip4"]
     assert scene_json["rois"][0] == {"name": "strip1", "x0_px": 125, "y0_px": 81,
                                      "x1_px": 155, "y1_px": 425}
-    assert SceneConfig.model_validate(scene_json["config"]) == config
+    assert MarkerSceneConfig.model_validate(scene_json["config"]) == config
 
 
 # -- reproducibility and output -------------------------------------------------------------

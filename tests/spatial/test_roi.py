@@ -56,10 +56,10 @@ def test_median_centroid_equals_filtered_frames(tmp_path):
                                window_us=50_000, n_frames=10)
     filt = median_filter_frames(pos, 3).astype(np.float64)
     for j, r in enumerate(rois):
-        sub = filt[:, r.y0:r.y1, r.x0:r.x1]
+        sub = filt[:, r.y0_px:r.y1_px, r.x0_px:r.x1_px]
         w = sub.sum(axis=(1, 2))
         np.testing.assert_allclose(sums[:, j, 0], w)
-        np.testing.assert_allclose(sums[:, j, 2], (sub.sum(axis=2) * np.arange(r.y0, r.y1))
+        np.testing.assert_allclose(sums[:, j, 2], (sub.sum(axis=2) * np.arange(r.y0_px, r.y1_px))
                                    .sum(axis=1))
 
 
@@ -114,9 +114,9 @@ def test_propose_rois_finds_the_strips_from_a_press():
     assert [r.name for r in rois] == ["roi_1", "roi_2", "roi_3"]
     for got, strip in zip(rois, STRIP_ROIS, strict=True):
         # the band at rest: x over the strip, y around y1 - 20 +- 6 px
-        assert got.x0 <= strip.x0 + 2 and got.x1 >= strip.x1 - 2
-        assert abs(got.x0 - strip.x0) <= 6 and abs(got.x1 - strip.x1) <= 6
-        assert got.y0 <= strip.y1 - 26 and got.y1 >= strip.y1 - 14
+        assert got.x0_px <= strip.x0_px + 2 and got.x1_px >= strip.x1_px - 2
+        assert abs(got.x0_px - strip.x0_px) <= 6 and abs(got.x1_px - strip.x1_px) <= 6
+        assert got.y0_px <= strip.y1_px - 26 and got.y1_px >= strip.y1_px - 14
         assert got.height_px < 30
     assert propose_rois(np.zeros((H, W))) == []
 
@@ -133,7 +133,7 @@ def test_centroid_series_shape_and_times(tmp_path):
     # the raw series keeps the background, 2.3 % of the ROI's events, which pull it ~2.3 px
     # towards the ROI's middle (y 240)
     rest = c[(t_s > 0.12) & (t_s < 0.28), :, 1]
-    expected = [0.977 * (r.y1 - 20.5) + 0.023 * 239.5 for r in STRIP_ROIS]
+    expected = [0.977 * (r.y1_px - 20.5) + 0.023 * 239.5 for r in STRIP_ROIS]
     np.testing.assert_allclose(np.nanmean(rest, axis=0), expected, atol=1.5)
     with TactileFile(f) as tf, pytest.raises(InputError,
                                              match="no trial 'nope'; the file has 1 trial"):

@@ -97,7 +97,7 @@ def test_no_events_is_nan_with_weight_zero_and_background_is_uniform_over_the_ro
     assert np.isfinite(c.centroid_px[measured]).all()
     single = c.weight[:, 0] == 1  # one event: a pixel of the ROI
     ys = c.centroid_px[single, 0, 1]
-    assert ys.min() >= ROI.y0 and ys.max() <= ROI.y1 - 1 and np.all(ys == np.round(ys))
+    assert ys.min() >= ROI.y0_px and ys.max() <= ROI.y1_px - 1 and np.all(ys == np.round(ys))
     w = c.weight[measured, 0]
     pooled = (c.centroid_px[measured, 0] * w[:, None]).sum(axis=0) / w.sum()
     np.testing.assert_allclose(pooled, ROI.centre_px, atol=3)  # ~20,000 events: sd 0.7 px
@@ -109,7 +109,7 @@ def test_a_band_pushed_out_of_the_roi_loses_its_events():
     assert c.weight[40, 0] == pytest.approx(6000, rel=0.05)  # at rest, wholly inside
     assert (c.weight[120:150, 0] == 0).all()  # band beyond y0 - 20: no event
     measured = c.weight[:, 0] > 0
-    assert np.all(c.centroid_px[measured, 0, 1] >= roi.y0)  # whole pixels of the ROI
+    assert np.all(c.centroid_px[measured, 0, 1] >= roi.y0_px)  # whole pixels of the ROI
 
 
 def test_speed_and_geometry_are_drawn_per_trial_within_the_config():

@@ -9,8 +9,8 @@ from tactile_cli.spectral import (
     FrameSettings,
     SpectrumTracker,
     band_peak,
+    causal_moving_average,
     frame_spectra,
-    moving_average,
 )
 
 
@@ -42,8 +42,8 @@ def test_tracker_gives_the_offline_frames_whatever_the_chunks():
                                atol=1e-12)
 
 
-def test_moving_average_is_causal_and_errors_name_arguments():
-    np.testing.assert_allclose(moving_average(np.array([1.0, 3, 5, 7]), 2), [1, 2, 4, 6])
+def test_causal_moving_average_is_causal_and_errors_name_arguments():
+    np.testing.assert_allclose(causal_moving_average(np.array([1.0, 3, 5, 7]), 2), [1, 2, 4, 6])
     with pytest.raises(ValueError, match="`band_hz`"):
         band_peak(np.ones((2, 5)), np.arange(5.0), (10, 20))
     with pytest.raises(ValueError, match="`window_s`"):
