@@ -59,6 +59,7 @@ from typing import Any
 
 from ..errors import InputError, TactileError
 from ..interrupt import raise_if_requested
+from ..threads import check_threads
 
 #: Environment variable with the address of an existing Dask scheduler.
 SCHEDULER_ENV = "TACTILE_DASK_SCHEDULER"
@@ -253,8 +254,8 @@ def map_tasks(
     keys = [f"task-{i}" for i in range(len(specs))] if keys is None else list(keys)
     if len(keys) != len(specs):
         raise ValueError(f"`keys` ({len(keys)}) and `specs` ({len(specs)}) differ in length")
-    if workers is not None and workers < 0:
-        raise InputError(f"`workers` (={workers}) must be >= 0")
+    if workers is not None and workers != 0:
+        check_threads(workers, "workers")  # 1 to 4 x the cores: more only wait for each other
     if retries < 0:
         raise InputError(f"`retries` (={retries}) must be >= 0")
     if not specs:
