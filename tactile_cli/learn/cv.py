@@ -47,9 +47,9 @@ import torch
 
 from .._version import __version__
 from ..errors import InputError
-from ..store.atomic import swap_into_place, write_text
+from ..store.atomic import swap_into_place, write_error, write_text
 from ..store.origin import data_origin
-from ..store.outdir import check_output_folder, output_folder
+from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .config import TrainConfig, parse_config
@@ -189,9 +189,11 @@ def train_cv(
     finished = _resume(partial, record, overwrite)
     if on_plan is not None:
         on_plan(plan, finished)
-    partial.mkdir(parents=True, exist_ok=True)
+    try:
+        (partial / FOLDS_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(exc, partial) from None
     runs.write_json(partial / PLAN_JSON, record, overwrite=True)
-    (partial / FOLDS_DIR).mkdir(exist_ok=True)
     command = command if command is not None else current_command()
     todo = [f for f in plan.folds if f.index not in finished]
     jobs = default_jobs(len(todo), config.optim.threads) if jobs is None else max(1, jobs)
@@ -238,10 +240,11 @@ def train_cv(
     info["wall_time_s"] = time.perf_counter() - started
     runs.write_json(partial / runs.RUN_JSON, info, overwrite=True)
     write_text(partial / runs.CONFIG_YAML, config.as_yaml(), overwrite=True)
-    with output_folder(out, overwrite=overwrite) as tmp:
-        for entry in partial.iterdir():
-            swap_into_place(entry, tmp / entry.name)
-    shutil.rmtree(partial, ignore_errors=True)
+    if out.exists() and not overwrite:  # appeared while we worked
+        raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
+    # the finished folder becomes RUN in one rename (an earlier RUN is replaced only now);
+    # until then a stop keeps every finished fold in `partial` for the next try
+    swap_into_place(partial, out)
     return CvTrainResult(out, config.model.family, plan.k, len(plan.folds), plan.mode, plan.by,
                          sorted(finished), [f.index for f in todo], jobs,
                          info["wall_time_s"], list(plan.warnings),
