@@ -47,7 +47,13 @@ import torch
 
 from .._version import __version__
 from ..errors import InputError
-from ..store.atomic import swap_into_place, write_error, write_text
+from ..interrupt import raise_if_requested
+from ..store.atomic import (
+    remove_stale_temporaries,
+    swap_into_place,
+    write_error,
+    write_text,
+)
 from ..store.origin import data_origin
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
@@ -219,15 +225,15 @@ def train_cv(
                 pool.submit(_train_fold, *args(f)): f.index for f in todo}
             try:
                 while pending:
-                    done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    raise_if_requested()  # Ctrl-C: noticed within a poll, not after the folds
+                    done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
                     for fut in done:
                         index = pending.pop(fut)
                         summaries[index] = fut.result()
                         if on_fold is not None:
                             on_fold(index, summaries[index])
             except BaseException:
-                for fut in pending:
-                    fut.cancel()
+                _stop_pool(pool, [partial / FOLDS_DIR / fold_name(f.index) for f in todo])
                 raise
     for index in finished:
         info = runs.read_run_info(partial / FOLDS_DIR / fold_name(index))
@@ -249,6 +255,19 @@ def train_cv(
                          sorted(finished), [f.index for f in todo], jobs,
                          info["wall_time_s"], list(plan.warnings),
                          [{"fold": i, **summaries[i]} for i in sorted(summaries)])
+
+
+def _stop_pool(pool: ProcessPoolExecutor, fold_dirs: Sequence[Path]) -> None:
+    """Stop the fold processes at once (a fold under way is lost, the finished ones stay in
+    the partial folder) and remove the temporary folders they leave."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        proc.terminate()
+    for proc in procs:
+        proc.join(timeout=10)
+    for folder in fold_dirs:
+        remove_stale_temporaries(folder)
 
 
 def _resume(partial: Path, record: dict[str, Any], overwrite: bool) -> list[int]:
