@@ -1014,6 +1014,9 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         case(d, command, [a if a not in ("{RUN}",) else "{IN}" for a in argv], REFUSE)
 
     add_chain_cases(add, case, base, rng)
+    from .learn_outputs import add_learn_output_cases
+
+    add_learn_output_cases(add, case, base, REFUSE)
 
     if fresh:
         (corpus_dir / ".complete").write_text("ok\n")

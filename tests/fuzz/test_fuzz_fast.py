@@ -35,7 +35,7 @@ RATE_PERCENT = {"info": 3, "validate": 4, "plot": 3, "grade": 5, "train": 3, "ev
                 "accel-prepare": 2, "detect-delay": 1, "features": 1, "slip-interface": 1,
                 "vibro-model": 5, "detect-contact": 2, "normal-labels": 3, "heightmap": 2,
                 "slip-signal": 3, "monitor": 1, "simulate": 2, "export": 4, "sweep": 5}
-ALWAYS = ("clash", "symlink")  # kinds run in full: few cases, each a different command
+ALWAYS = ("clash", "symlink", "learn-io")  # kinds run in full: few cases each
 
 
 def _source_key() -> str:
