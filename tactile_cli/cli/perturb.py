@@ -22,6 +22,7 @@ FLAGS: dict[str, Flag] = {
     "out_dir": "--out",
     "out": "--out",
     "name": "--name",
+    "seed": "--seed",
 }
 
 

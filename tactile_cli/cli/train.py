@@ -18,6 +18,8 @@ FLAGS: dict[str, Flag] = {
     "jobs": "--jobs",
     "out": "--out",
     "split_from": "--split-from",
+    "seed": "--seed",
+    "epochs": "--epochs",
 }
 
 

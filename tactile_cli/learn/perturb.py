@@ -920,7 +920,10 @@ def perturb_runs(
     level_map = parse_levels(levels)
     if split not in ("all", "test"):
         raise InputError(f"`split` must be all or test, got {split!r}")
-    folder = name or runs.eval_dir_name([Path(p) for p in data_paths], split)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"`seed` (={seed!r}) must be a whole number >= 0")
+    folder = runs.check_result_name(name) or runs.eval_dir_name([Path(p) for p in data_paths],
+                                                                split)
     for run in run_dirs:
         check_outputs({"out": out, "name": Path(run) / PERTURB_DIR / folder}, data_paths)
     if out is not None:  # the chart is added to an existing folder; a file there is refused

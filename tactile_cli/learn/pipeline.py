@@ -105,7 +105,7 @@ def train_run(
 
         check_outputs({"out": partial_dir(out)}, inputs)
     cfg = config if isinstance(config, TrainConfig) else load_config(config)
-    cfg = cfg.with_overrides(seed=seed, epochs=epochs)
+    cfg = _with_overrides(cfg, seed=seed, epochs=epochs)
     family = cfg.model.family
 
     def started(prep: Prepared) -> None:
@@ -141,6 +141,19 @@ def train_run(
         given = GivenSplits(read_split_csv(split_from), str(split_from), "csv")
     return train(cfg, paths, out, config_path=config_path, overwrite=overwrite,
                  command=command, on_epoch=on_epoch, on_start=started, given=given)
+
+
+def _with_overrides(cfg: TrainConfig, *, seed: int | None, epochs: int | None) -> TrainConfig:
+    """The config with ``seed`` and ``epochs`` applied; a value the config refuses is one
+    :class:`InputError` naming the argument."""
+    from pydantic import ValidationError
+
+    try:
+        return cfg.with_overrides(seed=seed, epochs=epochs)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        name, value = ("seed", seed) if tuple(err["loc"]) == ("seed",) else ("epochs", epochs)
+        raise InputError(f"`{name}` (={value}): {str(err['msg']).lower()}") from None
 
 
 # -- the lines of a training --------------------------------------------------------------------
@@ -251,6 +264,7 @@ def evaluate_run(
     if split not in ("all", "test"):
         raise InputError(f"`split` must be all or test, got {split!r}")
     check_threads(threads, "threads")
+    runs.check_result_name(name)
     if perturb is not None:
         parse_threshold(threshold)  # a bad value fails before any work
     if files:

@@ -127,6 +127,15 @@ def test_perturb_compare_and_report_refuse_outputs_holding_their_inputs(run, dat
       "{tmp}/cv"], "--jobs (=4096)"),
     (["perturb", "{run}", "--data", "{data}", "--kinds", "scale", "--levels", "scale=1e9"],
      "scale level 1e+09 is not a time factor from 0.001 to 1000"),
+    (["perturb", "{run}", "--data", "{data}", "--seed", "-1"], "--seed (=-1) must be"),
+    (["train", "{config}", "--data", "{data}", "--seed", "-1", "--out", "{tmp}/cv"],
+     "--seed (=-1): input should be greater than or equal to 0"),
+    (["train", "{config}", "--data", "{data}", "--epochs", "100000000000", "--out",
+      "{tmp}/cv"], "--epochs (=100000000000): input should be less than or equal to"),
+    (["evaluate", "{run}", "--data", "{data}", "--name", "../x"],
+     "--name (='../x') must be a plain folder name"),
+    (["perturb", "{run}", "--data", "{data}", "--name", ".."],
+     "--name (='..') must be a plain folder name"),
 ])
 def test_absurd_counts_are_one_line_before_any_work(run, data, config, tmp_path, argv, flag):
     before = _tree(run)
