@@ -81,7 +81,8 @@ def factory_model(work: Path, shape: tuple[int, int], px_per_mm: float) -> Path:
     """A normal network trained on factory presses of ``shape`` (seed 0)."""
     import yaml
 
-    from tactile_cli.learn import parse_config, train
+    from tactile_cli.learn import parse_config
+    from tactile_cli.learn.train import train
     from tactile_cli.store import StoreWriter
     from tests.factories.gel_frames import TRAIN_YAML, normals_of, shade, sphere_cap
 

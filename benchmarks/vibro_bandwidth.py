@@ -29,7 +29,9 @@ sys.path.insert(0, str(ROOT))
 
 from tactile_cli._version import __version__  # noqa: E402
 from tactile_cli.accel.prepare import prepare_file  # noqa: E402
-from tactile_cli.learn import evaluate, load_config, train  # noqa: E402
+from tactile_cli.learn import load_config  # noqa: E402
+from tactile_cli.learn.evaluate import evaluate  # noqa: E402
+from tactile_cli.learn.train import train  # noqa: E402
 from tactile_cli.spectral import bandwidth_steps  # noqa: E402
 
 

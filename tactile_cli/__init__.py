@@ -11,7 +11,7 @@ The library API (importable in a notebook without the CLI)::
             trial.labels, trial.annotations
 
 Each chain's main verbs are here too (``tc.accumulate_file``, ``tc.fit_fos_file``,
-``tc.train``, ...); they are imported when first used, so ``import tactile_cli`` does not
+``tc.train_run``, ...); they are imported when first used, so ``import tactile_cli`` does not
 load torch or JAX.
 """
 
@@ -64,11 +64,14 @@ _VERBS = {
     "fit_files": "fos.fit_files",
     "grade_trials": "grade.grading",
     "grade_files": "grade.pipeline",
-    "train": "learn.train",
-    "evaluate": "learn.evaluate",
+    "train_run": "learn.pipeline",
+    "evaluate_run": "learn.pipeline",
     "compare": "learn.compare",
+    "compare_runs": "learn.compare",
     "export_run": "learn.export",
     "perturb_evaluate": "learn.perturb",
+    "perturb_runs": "learn.perturb",
+    "run_sweep": "learn.sweep",
     "build_report": "learn.report",
     "quicklook": "plots.quicklook",
     "write_quicklook": "plots.quicklook",

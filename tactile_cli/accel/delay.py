@@ -30,6 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import InputError
+from ..threads import check_threads
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,19 @@ class DelayResult:
         out["missed"] = self.n_onsets - self.n_detected
         out["missed_long"] = self.n_onsets_long - self.n_detected_long
         return out
+
+    def summary(self) -> str:
+        """The line ``tactile detect-delay`` prints."""
+        long = ("" if self.delay_long_ms is None
+                else f", after {self.delay_long_ms:.2f} ms on those")
+        return (f"slip detected after {self.delay_samples:.1f} samples = "
+                f"{self.delay_samples_ms:.2f} ms (+ inference {self.inference_ms:.2f} ms) = "
+                f"{self.total_ms:.2f} ms (mean over the detected onsets); "
+                f"{self.n_detected}/{self.n_onsets} onsets detected, "
+                f"{self.n_detected_long}/{self.n_onsets_long} of the slips lasting at least "
+                f"one window ({self.window} samples){long}; motion accuracy "
+                f"{100 * self.motion_accuracy:.1f} % over {self.n_windows} windows (stride "
+                f"{self.stride})")
 
 
 def onset_outcomes(labels: np.ndarray, ends: np.ndarray, predicted: np.ndarray, slip: int
@@ -116,6 +130,9 @@ def detection_delay(run_dir: str | Path, data_paths: Sequence[str | Path], *, st
 
     if stride < 1:
         raise InputError(f"`stride` (={stride}) must be >= 1")
+    if split not in ("test", "all"):
+        raise InputError(f"`split` must be test or all, got {split!r}")
+    check_threads(threads, "threads")  # before torch tries to start them
     run = load_run(run_dir)
     head = next((h for h in run.heads if h.name == motion), None)
     if head is None or head.kind != "classification" or slip_class not in head.classes:

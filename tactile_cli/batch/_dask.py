@@ -42,8 +42,8 @@ and renamed. On a file system without working ``flock`` (some NFS mounts) set
 Ctrl-C: local workers ignore SIGINT (the terminal sends it to every process of the
 group); the loop here checks :func:`tactile_cli.interrupt.raise_if_requested` several
 times a second, cancels what is left and shuts the cluster down, which stops the workers.
-Dask's log messages are held at ERROR level for the call, so the command's output stays
-readable.
+Dask's log messages are held at ERROR level for the call (CRITICAL in the local workers),
+so the command's output stays readable.
 """
 
 from __future__ import annotations
@@ -60,12 +60,17 @@ from typing import Any
 
 from ..errors import InputError, TactileError
 from ..interrupt import raise_if_requested
+from ..threads import check_threads
 
 #: Environment variable with the address of an existing Dask scheduler.
 SCHEDULER_ENV = "TACTILE_DASK_SCHEDULER"
 
 #: Loggers held at ERROR during a call (distributed logs to stderr at INFO and WARNING).
 _LOGGERS = ("distributed", "bokeh", "tornado")
+#: The local workers log only what stops them: a task's error comes back as its result,
+#: and the heartbeat tracebacks of workers stopped by Ctrl-C (CommClosedError) would break
+#: the command's one-line report
+_WORKER_LOG_LEVEL = logging.CRITICAL
 #: Seconds between checks for Ctrl-C while waiting for tasks.
 _POLL_S = 0.1
 
@@ -205,7 +210,7 @@ def _client(address: str | None, workers: int, retries: int = 1) -> Iterator[Any
                                host="127.0.0.1", dashboard_address=None,
                                scheduler_kwargs={"dashboard": False,
                                                  "dashboard_address": "127.0.0.1:0"},
-                               silence_logs=logging.ERROR)
+                               silence_logs=_WORKER_LOG_LEVEL)
     try:
         client = Client(cluster)
         try:
@@ -263,8 +268,8 @@ def map_tasks(
     keys = [f"task-{i}" for i in range(len(specs))] if keys is None else list(keys)
     if len(keys) != len(specs):
         raise ValueError(f"`keys` ({len(keys)}) and `specs` ({len(specs)}) differ in length")
-    if workers is not None and workers < 0:
-        raise InputError(f"`workers` (={workers}) must be >= 0")
+    if workers is not None and workers != 0:
+        check_threads(workers, "workers")  # 1 to 4 x the cores: more only wait for each other
     if retries < 0:
         raise InputError(f"`retries` (={retries}) must be >= 0")
     if not specs:

@@ -33,6 +33,7 @@ from typing import Any, Literal
 
 from ..config_file import missing_file_error
 from ..errors import InputError
+from ..input_guard import check_outputs
 from ._dask import BatchCounts, map_tasks
 
 Status = Literal["todo", "skipped", "ok", "failed"]
@@ -112,13 +113,16 @@ def newest_mtime(path: str | Path) -> float:
 def plan_outputs(inputs: Sequence[str | Path], out_dir: str | Path, *,
                  output_name: Callable[[Path], str] = lambda p: f"{p.stem}.h5",
                  newer_than: float = 0.0, overwrite: bool = False,
-                 same_name_hint: str = "rename one") -> list[FileItem]:
+                 same_name_hint: str = "rename one",
+                 is_complete: Callable[[Path], bool] | None = None) -> list[FileItem]:
     """One item per input, its output ``<out_dir>/<output_name(input)>``, ``skipped`` where
     that output exists and is newer than the input (a folder: everything in it) and than
-    ``newer_than`` (a time stamp of other inputs, such as a mapping), unless ``overwrite``.
-    Refused before any work (:class:`InputError`): no input, a missing input, ``out_dir``
-    a file, two inputs with one output name (``same_name_hint`` says what to do), an
-    output that is a folder."""
+    ``newer_than`` (a time stamp of other inputs, such as a mapping), unless ``overwrite``;
+    ``is_complete(output)``, when given, must also hold for it to be skipped (a damaged
+    output of an earlier batch is made again). Refused before any work
+    (:class:`InputError`): no input, a missing input, ``out_dir`` a file, two inputs with
+    one output name (``same_name_hint`` says what to do), an output that is a folder, an
+    output that is an input or contains one (:func:`~tactile_cli.input_guard.check_outputs`)."""
     paths = [Path(p) for p in inputs]
     if not paths:
         raise InputError("no input files given")
@@ -140,8 +144,10 @@ def plan_outputs(inputs: Sequence[str | Path], out_dir: str | Path, *,
         if target.is_dir():
             raise InputError("output is a folder; remove or rename it", path=target)
         fresh = (not overwrite and target.is_file()
-                 and target.stat().st_mtime > max(newest_mtime(path), newer_than))
+                 and target.stat().st_mtime > max(newest_mtime(path), newer_than)
+                 and (is_complete is None or is_complete(target)))
         items.append(FileItem(str(path), str(target), "skipped" if fresh else "todo"))
+    check_outputs([item.output for item in items], paths)
     return items
 
 

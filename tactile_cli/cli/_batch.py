@@ -5,7 +5,6 @@ a summary line or ``--json``, exit 2 when an input failed after the others are d
 from __future__ import annotations
 
 import json
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Annotated, Any
@@ -13,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ._errors import EXIT_BAD_INPUT
+from ._output import Progress
 
 if TYPE_CHECKING:
     from ..batch import FileBatchResult, FileCounts, FileItem
@@ -58,22 +58,9 @@ class FileBatchPrinter:
     def __init__(self, verb: str, *, progress: bool | None = None,
                  describe: Callable[[FileItem], str] | None = None,
                  flags: Callable[[str], str] = lambda s: s, todo: str = "to do"):
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
         self.verb, self.describe, self.flags, self.todo = verb, describe, flags, todo
-        console = Console(stderr=True)
-        self.show_bar = console.is_terminal if progress is None else progress
-        self.bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                            TextColumn("{task.completed}/{task.total} inputs"),
-                            TimeElapsedColumn(), console=console, disable=not self.show_bar)
-        self.task = self.bar.add_task(verb, total=None)
-
-    def say(self, line: str) -> None:
-        if self.show_bar:
-            self.bar.console.print(line, markup=False, highlight=False)
-        else:
-            print(line, file=sys.stderr, flush=True)
+        self.progress = Progress(verb, "inputs", show=progress)
+        self.say = self.progress.say
 
     def on_plan(self, items: list[FileItem]) -> None:
         todo = sum(item.status == "todo" for item in items)
@@ -81,9 +68,9 @@ class FileBatchPrinter:
                  "to date (skipped)")
 
     def on_progress(self, c: FileCounts) -> None:
-        self.bar.update(self.task, total=c.total, completed=c.done + c.failed,
-                        description=f"{self.verb}: {c.done}/{c.total} done, {c.running} "
-                        f"running, {c.failed} failed")
+        self.progress.update(total=c.total, completed=c.done + c.failed,
+                             description=f"{self.verb}: {c.done}/{c.total} done, {c.running} "
+                             f"running, {c.failed} failed")
 
     def on_item(self, item: FileItem) -> None:
         if item.status == "ok":
@@ -99,7 +86,7 @@ class FileBatchPrinter:
 
     @contextmanager
     def running(self) -> Iterator[FileBatchPrinter]:
-        with self.bar:
+        with self.progress.running():
             yield self
 
 

@@ -7,6 +7,8 @@ report of a command line click refuses.
 - :func:`usage_error`: an unknown option, a bad value or a missing argument is one
   ``tactile: error:`` line on stderr with the help command to run, exit 2, like every other
   error of the toolkit.
+- :func:`data_files`, :func:`runs_and_files`: the file lists of commands that take
+  ``--data FILE...`` (a shell glob after ``--data``) and run folders mixed with files.
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import typer
+
+from ..errors import InputError
 
 try:  # typer 0.2x carries its own copy of click's core
     from typer import _click as _click  # type: ignore[attr-defined]
@@ -81,5 +86,25 @@ def usage_error(exc: Any) -> int:
     return exc.exit_code if exc.exit_code else EXIT_USAGE
 
 
+def data_files(data: list[Path] | None, ctx: typer.Context) -> list[Path]:
+    """``--data`` values plus the files a shell glob put after it (``--data runs/*.h5``); a
+    left-over argument that looks like an option is refused (for commands that allow extra
+    arguments)."""
+    for a in ctx.args:
+        if a.startswith("-"):
+            raise InputError(f"unknown option {a!r}; see --help")
+    return [*(data or []), *(Path(a) for a in ctx.args)]
+
+
+def runs_and_files(paths: list[Path], data: list[Path] | None) -> tuple[list[Path], list[Path]]:
+    """Split positional paths into run folders and data files: a run is a folder, so a
+    positional path that is a file is a data file (``--data a.h5 b.h5`` leaves ``b.h5``
+    among the positional arguments)."""
+    runs, files = [], list(data or [])
+    for p in paths:
+        (files if p.is_file() else runs).append(p)
+    return runs, files
+
+
 __all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "NoArgsIsHelpError",
-           "finite_float_options", "usage_error"]
+           "data_files", "finite_float_options", "runs_and_files", "usage_error"]

@@ -3,18 +3,13 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
-
-if TYPE_CHECKING:
-    from rich.table import Table
-
-    from ..learn.compare import Comparison
+from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -24,17 +19,6 @@ FLAGS: dict[str, Flag] = {
     "out_dir": "--out",
     "targets": "--target",
 }
-
-
-def runs_and_files(paths: list[Path] | None, data: list[Path] | None) -> tuple[list[Path],
-                                                                              list[Path]]:
-    """Split positional paths into run folders and data files: a run is a folder, so a
-    positional path that is a file is a data file (``--data a.h5 b.h5`` leaves ``b.h5``
-    among the positional arguments)."""
-    runs, files = [], list(data or [])
-    for p in paths or []:
-        (files if p.is_file() else runs).append(p)
-    return runs, files
 
 
 def compare_command(
@@ -79,85 +63,20 @@ def compare_command(
     such run."""
 
     def body() -> None:
-        from rich.console import Console
+        from ..learn.compare import compare_runs, comparison_record
+        from ..learn.tables import comparison_table
 
-        from ..learn.compare import compare, comparison_record, write_comparison
-        from ..learn.runs import dumps
-
-        cmp = compare(runs, data_name=data_name, margin_pp=margin, metric=metric,
-                      targets=_parse_targets(target or []))
-        files = write_comparison(cmp, out) if out is not None else None
-        for note in cmp.notes:
-            print(f"tactile: warning: {note}", file=sys.stderr)
+        cmp = compare_runs(runs, data_name=data_name, margin_pp=margin, metric=metric,
+                           targets=target or [], out_dir=out)
+        warn(cmp.notes)
         if as_json:
-            typer.echo(dumps(comparison_record(cmp)))
+            echo_json(comparison_record(cmp))
             return
-        table = _table(cmp)
         # on a terminal the run names fold over lines where it is narrow; into a file or a
         # pipe the table is as wide as it needs, so no name is cut or folded
-        console = Console(width=None if sys.stdout.isatty() else _natural_width(table))
-        console.print(table)
+        print_blocks([comparison_table(cmp)], width="natural")
         typer.echo(cmp.summary())
-        if files is not None:
-            typer.echo(f"wrote {files.png}, {files.csv.name}, {files.json.name}")
+        if cmp.files is not None:
+            typer.echo(f"wrote {cmp.files.png}, {cmp.files.csv.name}, {cmp.files.json.name}")
 
     run_guarded(body, flags=FLAGS)
-
-
-def _parse_targets(items: list[str]) -> dict[str, float]:
-    """``["motion=0.948", "speed_cm_s=3.4"]`` -> ``{"motion": 0.948, "speed_cm_s": 3.4}``."""
-    from ..errors import InputError
-
-    out: dict[str, float] = {}
-    for item in items:
-        head, sep, value = item.partition("=")
-        try:
-            number = float(value)
-        except ValueError:
-            number = float("nan")
-        if not sep or not head.strip() or number != number:
-            raise InputError(f"--target {item!r}: give HEAD=VALUE, e.g. motion=0.948")
-        if head.strip() in out:
-            raise InputError(f"--target {head.strip()!r} given twice")
-        out[head.strip()] = number
-    return out
-
-
-def _table(cmp: Comparison) -> Table:
-    """The comparison table; each run named by the part of its folder that tells it apart
-    from the others (:func:`~tactile_cli.learn.compare.distinct_run_paths`)."""
-    from rich.table import Table
-
-    from ..learn.compare import distinct_run_paths, table_rows
-
-    rows = table_rows(cmp)
-    exported = any(row["exported_latency_ms"] is not None for row in rows)
-    table = Table(title=f"{cmp.metric_label} against cost on {cmp.data_name}")
-    table.add_column("run", overflow="fold")
-    table.add_column("family")
-    for col in (f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms", "p95 ms",
-                *(("exported ms",) if exported else ()),
-                "windows/s", "parameters", "MB", "Pareto", "in margin", ""):
-        table.add_column(col, justify="right")
-    for row, name in zip(rows, distinct_run_paths([row["run"] for row in rows]), strict=True):
-        lat = row["latency_ms_median"]
-        table.add_row(
-            name, row["family"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
-            "" if lat is None else f"{lat:.3f}",
-            "" if row["latency_ms_p95"] is None else f"{row['latency_ms_p95']:.3f}",
-            *(("" if row["exported_latency_ms"] is None
-               else f"{row['exported_latency_ms']:.3f}",) if exported else ()),
-            "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",
-            f"{row['n_params']:,}", f"{row['size_mb']:.4f}",
-            "*" if row["pareto"] else "", "*" if row["within_margin"] else "",
-            ("needed" if row["needed"] else ("fastest" if row["fastest"] else ""))
-            + ("" if row["meets_targets"] is None else
-               (" (meets targets)" if row["meets_targets"] else " (misses a target)")))
-    return table
-
-
-def _natural_width(table: Table) -> int:
-    """Columns the table takes when nothing wraps."""
-    from rich.console import Console
-
-    return Console(width=10_000).measure(table).maximum

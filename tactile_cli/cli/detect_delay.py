@@ -9,8 +9,10 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import data_files
 
-FLAGS: dict[str, Flag] = {"data_paths": "--data", "stride": "--stride", "split": "--split"}
+FLAGS: dict[str, Flag] = {"data_paths": "--data", "stride": "--stride", "split": "--split",
+                          "threads": "--threads"}
 
 
 def detect_delay_command(
@@ -41,26 +43,12 @@ def detect_delay_command(
 
     def body() -> None:
         from ..accel.delay import detection_delay
-        from ..errors import InputError
 
-        if split not in ("test", "all"):
-            raise InputError(f"--split must be test or all, got {split!r}")
-        paths = [*data, *(Path(a) for a in ctx.args)]
-        result = detection_delay(run, paths, stride=stride, split=split,  # type: ignore[arg-type]
-                                 threads=threads)
-        out = result.as_dict()
+        result = detection_delay(run, data_files(data, ctx), stride=stride,
+                                 split=split, threads=threads)  # type: ignore[arg-type]
         if as_json:
-            typer.echo(json.dumps(out, indent=2))
-            return
-        typer.echo(f"slip detected after {out['delay_samples']:.1f} samples = "
-                   f"{out['delay_samples_ms']:.2f} ms (+ inference {out['inference_ms']:.2f} ms)"
-                   f" = {out['total_ms']:.2f} ms (mean over the detected onsets); "
-                   f"{out['n_detected']}/{out['n_onsets']} onsets detected, "
-                   f"{out['n_detected_long']}/{out['n_onsets_long']} of the slips lasting at "
-                   f"least one window ({out['window']} samples)"
-                   + (f", after {out['delay_long_ms']:.2f} ms on those"
-                      if out["delay_long_ms"] is not None else "")
-                   + f"; motion accuracy {100 * out['motion_accuracy']:.1f} % over "
-                   f"{out['n_windows']} windows (stride {stride})")
+            typer.echo(json.dumps(result.as_dict(), indent=2))
+        else:
+            typer.echo(result.summary())
 
     run_guarded(body, flags=FLAGS)

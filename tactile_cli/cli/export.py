@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
+from ._output import echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -42,17 +43,11 @@ def export_command(
     the run's provenance."""
 
     def body() -> None:
-        from ..learn.export import FORMATS, export_run
-        from ..learn.runs import dumps
+        from ..learn.export import export_run
 
-        if fmt not in FORMATS:
-            from ..errors import InputError
-
-            raise InputError(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
-        result = export_run(run, out, format=fmt,  # type: ignore[arg-type]
-                            overwrite=overwrite)
+        result = export_run(run, out, format=fmt, overwrite=overwrite)  # type: ignore[arg-type]
         if as_json:
-            typer.echo(dumps(result.sidecar_record))
+            echo_json(result.sidecar_record)
             return
         heads = ", ".join(result.outputs)
         typer.echo(f"wrote {result.path} ({result.format}, {result.family}, "

@@ -9,7 +9,7 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
-from .compare import runs_and_files
+from ._options import data_files, runs_and_files
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
@@ -70,11 +70,7 @@ def report_command(
 
         if out is None:
             raise InputError("give the output folder with --out DIR")
-        extra = [Path(a) for a in ctx.args]
-        for a in ctx.args:
-            if a.startswith("-"):
-                raise InputError(f"unknown option {a!r}; see --help")
-        run_dirs, files = runs_and_files([*(runs or []), *extra], data)
+        run_dirs, files = runs_and_files([*(runs or []), *data_files(None, ctx)], data)
         result = build_report(run_dirs, out, data_paths=files, figure_dirs=figures or [],
                               title=title, margin_pp=margin, metric=metric)
         typer.echo(str(result.index))

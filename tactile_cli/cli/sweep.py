@@ -3,22 +3,20 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 
 from ._batch import BATCH_FLAGS, scheduler_option, workers_option
-from ._errors import Flag, run_guarded
-
-if TYPE_CHECKING:
-    from ..learn.sweep import PlannedRun, SweepCounts, SweepResult
+from ._errors import EXIT_BAD_INPUT, Flag, run_guarded
+from ._output import Progress, echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "train_data": "--data",
     "eval_data": "--eval-data",
+    "out": "--out",
     **BATCH_FLAGS,
 }
 SweepScheduler = scheduler_option("")
@@ -64,59 +62,20 @@ def sweep_command(
     error; a stopped sweep restarted with the same --out skips its finished runs."""
 
     def body() -> None:
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+        from ..learn.sweep import run_sweep
 
-        from ..learn.runs import dumps
-        from ..learn.sweep import load_sweep, run_sweep
-
-        cfg = load_sweep(config)
-        console = Console(stderr=True)
-        show_bar = console.is_terminal if progress is None else progress
-        bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                       TextColumn("{task.completed}/{task.total} runs"), TimeElapsedColumn(),
-                       console=console, disable=not show_bar)
-        task = bar.add_task(f"sweep {cfg.name}", total=None)
-
-        def say(line: str) -> None:
-            if show_bar:
-                bar.console.print(line)
-            elif not as_json:
-                print(line, file=sys.stderr, flush=True)
-
-        def on_plan(planned: list[PlannedRun]) -> None:
-            n = {s: sum(r.status == s for r in planned) for s in ("todo", "finished", "n/a")}
-            say(f"sweep {cfg.name}: {len(planned)} runs in the grid: {n['todo']} to run, "
-                f"{n['finished']} finished before (skipped), {n['n/a']} n/a")
-
-        def on_progress(c: SweepCounts) -> None:
-            text = (f"{c.done}/{c.total} done, {c.running} running, {c.failed} failed")
-            bar.update(task, total=c.total, completed=c.done + c.failed,
-                       description=f"sweep {cfg.name}: {text}")
-
-        def on_run(name: str, ok: bool, error: str | None) -> None:
-            say(f"{name}: ok" if ok else f"{name}: failed: {error}")
-
-        with bar:
-            result = run_sweep(cfg, out, config_path=config, train_data=data,
-                               eval_data=eval_data, scheduler=scheduler, workers=workers,
-                               overwrite=overwrite, on_plan=on_plan, on_progress=on_progress,
-                               on_run=on_run)
+        bar = Progress("sweep", "runs", show=progress, quiet=as_json)
+        with bar.running():
+            result = run_sweep(config, out, train_data=data, eval_data=eval_data,
+                               scheduler=scheduler, workers=workers, overwrite=overwrite,
+                               on_line=bar.say, on_progress=lambda c: bar.update(
+                                   total=c.total, completed=c.done + c.failed,
+                                   description=f"sweep: {c.text()}"))
         if as_json:
-            typer.echo(dumps(result.as_dict()))
-            return
-        _print(result)
+            echo_json(result.as_dict())
+        else:
+            typer.echo(result.text(), nl=False)
+        if result.n_failed:  # after the table: the runs that worked are written
+            raise typer.Exit(code=EXIT_BAD_INPUT)
 
     run_guarded(body, flags=FLAGS)
-
-
-def _print(result: SweepResult) -> None:
-    """The table (markdown, as written to table.md) and the summary line."""
-    from ..learn.sweep import table_markdown
-
-    typer.echo(table_markdown(result.rows, result.heads), nl=False)
-    typer.echo(result.summary())
-    for note in result.notes:
-        typer.echo(f"note: {note}")
-    typer.echo(f"wrote {result.out_dir}: sweep.json, table.csv, table.md, "
-               "sweep_results.json, accuracy_vs_window.png, speed_accuracy.png, runs/")

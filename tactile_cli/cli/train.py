@@ -2,36 +2,25 @@
 
 from __future__ import annotations
 
-import datetime as _dt
-import math
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
-
-if TYPE_CHECKING:
-    from ..learn.config import TrainConfig
-    from ..learn.splits import FoldPlan
+from ._options import data_files
+from ._output import Progress, echo_json, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "data_paths": "--data FILE",
+    "data_paths": "--data FILE...",
     "k": "--cv",
     "jobs": "--jobs",
+    "out": "--out",
+    "split_from": "--split-from",
+    "seed": "--seed",
+    "epochs": "--epochs",
 }
-
-
-def data_files(data: list[Path] | None, ctx: typer.Context) -> list[Path]:
-    """``--data`` values plus the files a shell glob put after it (``--data runs/*.h5``)."""
-    extra = [Path(a) for a in ctx.args]
-    for a in ctx.args:
-        if a.startswith("-"):
-            raise InputError(f"unknown option {a!r}; see --help")
-    return [*(data or []), *extra]
 
 
 def train_command(
@@ -86,114 +75,21 @@ def train_command(
     history and curves, versions and data provenance. Deterministic with a seed on CPU."""
 
     def body() -> None:
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+        from ..learn.pipeline import epoch_line, train_run, train_summary
 
-        from ..learn.config import load_config
-        from ..learn.runs import dumps
-        from ..learn.train import EpochRecord, Prepared, train
-
-        cfg = load_config(config).with_overrides(seed=seed, epochs=epochs)
-        files = data_files(data, ctx)
-        if not files:
-            raise InputError("no data files; give --data FILE...")
-        run_dir = out
-        if run_dir is None:
-            stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-            run_dir = Path("runs") / f"{config.stem}-{stamp}"
-        console = Console(stderr=True)
-        show_bar = console.is_terminal if progress is None else progress
-        bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                       TextColumn("{task.completed}/{task.total} epochs"), TimeElapsedColumn(),
-                       console=console, disable=not show_bar)
-        task = bar.add_task("reading data", total=cfg.optim.epochs)
-
-        def on_start(prep: Prepared) -> None:
-            w = prep.windows
-            line = (f"{cfg.model.family}: {len(prep.trials)} trials ({prep.assignment.mode} "
-                    f"split {prep.assignment.counts()}), windows train {len(w['train']):,} "
-                    f"val {len(w['val']):,} test {len(w['test']):,}")
-            if show_bar:
-                bar.console.print(line)
-                bar.update(task, description="training")
-            elif not as_json:
-                print(line, file=sys.stderr)
-
-        def on_epoch(r: EpochRecord) -> None:
-            acc = "" if math.isnan(r.val_accuracy) else f" val acc {100 * r.val_accuracy:.2f} %"
-            val = "" if math.isnan(r.val_loss) else f" val loss {r.val_loss:.4f}"
-            text = f"epoch {r.epoch} loss {r.train_loss:.4f}{val}{acc}{' *' if r.best else ''}"
-            if show_bar:
-                bar.update(task, completed=r.epoch, description=text)
-            elif not as_json:
-                print(text, file=sys.stderr, flush=True)
-
-        if cv is not None:
-            if split_from is not None:
-                raise InputError("--split-from and --cv exclude each other: cross-validation "
-                                 "makes its own folds")
-            _train_cv(cfg, files, run_dir, cv, jobs, config, overwrite, as_json)
-            return
-        given = None
-        if split_from is not None:
-            from ..learn.splits import read_split_csv
-            from ..learn.train import GivenSplits
-
-            given = GivenSplits(read_split_csv(split_from), str(split_from), "csv")
-        with bar:
-            result = train(cfg, files, run_dir, config_path=config, overwrite=overwrite,
-                           on_epoch=on_epoch, on_start=on_start, given=given)
-        for w in result.warnings:
-            print(f"tactile: warning: {w}", file=sys.stderr)
+        bar = Progress("reading data", "epochs", show=False if cv else progress, quiet=as_json)
+        with bar.running():
+            result = train_run(
+                config, data_files(data, ctx), out=out, seed=seed, epochs=epochs, cv=cv,
+                jobs=jobs, split_from=split_from, overwrite=overwrite,
+                on_start=lambda _, cfg: bar.update(description="training",
+                                                   total=cfg.optim.epochs),
+                on_epoch=lambda r: bar.step(epoch_line(r), completed=r.epoch),
+                on_line=bar.say)
+        warn(result.warnings)
         if as_json:
-            typer.echo(dumps(result.as_dict()))
-            return
-        acc = result.best_val_accuracy
-        typer.echo(
-            f"wrote {result.run_dir}: {result.family}, {result.n_params:,} parameters, best "
-            f"epoch {result.best_epoch}/{len(result.history)}"
-            + ("" if math.isnan(acc) else f", val accuracy {100 * acc:.2f} %")
-            + f", trained in {result.train_time_s:.1f} s on {result.threads} thread(s)")
+            echo_json(result.as_dict())
+        else:
+            typer.echo(train_summary(result))
 
     run_guarded(body, flags=FLAGS)
-
-
-def _train_cv(cfg: TrainConfig, files: list[Path], run_dir: Path, cv: str, jobs: int | None,
-              config: Path, overwrite: bool, as_json: bool) -> None:
-    """``--cv``: train the folds with one line per fold on stderr."""
-    from ..learn.cv import parse_cv, train_cv
-    from ..learn.runs import dumps
-
-    k = parse_cv(cv)
-
-    def on_plan(plan: FoldPlan, finished: list[int]) -> None:
-        if as_json:
-            return
-        from ..learn.splits import fold_text
-
-        again = f", {len(finished)} already finished (resuming)" if finished else ""
-        print(f"{cfg.model.family}: "
-              f"{fold_text(plan.k, len(plan.folds), plan.mode, plan.by)}{again}",
-              file=sys.stderr, flush=True)
-        for w in plan.warnings:
-            print(f"tactile: warning: {w}", file=sys.stderr)
-
-    def on_fold(index: int, summary: dict[str, Any]) -> None:
-        if not as_json:
-            acc = summary.get("best_val_accuracy")
-            val = "" if acc is None or math.isnan(acc) else f", val accuracy {100 * acc:.2f} %"
-            n = summary["n_trials"]
-            print(f"fold {index}: {n['train']} training, {n['val']} validation, {n['test']} "
-                  f"held-out trials, best epoch "
-                  f"{summary['best_epoch']}/{summary['epochs_run']}{val}, "
-                  f"{summary['train_time_s']:.1f} s", file=sys.stderr, flush=True)
-
-    result = train_cv(cfg, files, run_dir, k=k, jobs=jobs, config_path=config,
-                      overwrite=overwrite, on_plan=on_plan, on_fold=on_fold)
-    if as_json:
-        typer.echo(dumps(result.as_dict()))
-        return
-    typer.echo(f"wrote {result.run_dir}: {result.family}, {result.n_folds} folds "
-               f"({result.mode}), {len(result.trained)} trained in {result.wall_time_s:.1f} s "
-               f"with {result.jobs} process(es); evaluate with `tactile evaluate "
-               f"{result.run_dir}`")

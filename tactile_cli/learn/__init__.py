@@ -7,6 +7,12 @@ Issue 4, items 1-4 (and the latency part of 8): windows of any tactile HDF5 stre
 (:mod:`.export`: a run as one ONNX or TorchScript file). First applied to the
 temporal LSTM action classifier of paper 000 (sec. 5, Table I).
 
+The verbs of the commands are :func:`train_run`, :func:`evaluate_run` (:mod:`.pipeline`),
+:func:`compare_runs`, :func:`perturb_runs`, :func:`export_run` and, for reports,
+``tactile_cli.learn.report.build_report``. ``tactile_cli.learn.train`` and
+``tactile_cli.learn.evaluate`` are the modules (one name, one meaning; their functions are
+``train.train`` and ``evaluate.evaluate``).
+
 The names below are loaded on first use (module ``__getattr__``): importing the package or
 a light submodule (``tactile_cli.learn.splits``, ``.config``) does not import torch; using
 a name from a torch module (``build_model``, ``train``, ...) does. The CLI imports them
@@ -17,8 +23,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import sys
-import types
 from typing import TYPE_CHECKING, Any
 
 #: public name -> the submodule that defines it (imported on first use)
@@ -39,7 +43,6 @@ _SOURCES: dict[str, str] = {
     "EvalResult": "evaluate",
     "RegressionMetrics": "evaluate",
     "classification_metrics": "evaluate",
-    "evaluate": "evaluate",
     "DeployedModel": "export",
     "ExportedModel": "export",
     "export_run": "export",
@@ -56,12 +59,17 @@ _SOURCES: dict[str, str] = {
     "TrainResult": "train",
     "predict": "train",
     "prepare": "train",
-    "train": "train",
+    "EvaluateRunResult": "pipeline",
+    "evaluate_run": "pipeline",
+    "train_run": "pipeline",
+    "compare_runs": "compare",
+    "perturb_runs": "perturb",
 }
 
 __all__ = sorted(_SOURCES)
 
 if TYPE_CHECKING:  # the names for type checkers and IDEs; no import at run time
+    from .compare import compare_runs as compare_runs
     from .config import FAMILIES as FAMILIES
     from .config import TrainConfig as TrainConfig
     from .config import load_config as load_config
@@ -78,7 +86,6 @@ if TYPE_CHECKING:  # the names for type checkers and IDEs; no import at run time
     from .evaluate import EvalResult as EvalResult
     from .evaluate import RegressionMetrics as RegressionMetrics
     from .evaluate import classification_metrics as classification_metrics
-    from .evaluate import evaluate as evaluate
     from .export import DeployedModel as DeployedModel
     from .export import ExportedModel as ExportedModel
     from .export import export_run as export_run
@@ -89,13 +96,16 @@ if TYPE_CHECKING:  # the names for type checkers and IDEs; no import at run time
     from .models import MultiTaskNet as MultiTaskNet
     from .models import build_model as build_model
     from .models import multitask_loss as multitask_loss
+    from .perturb import perturb_runs as perturb_runs
+    from .pipeline import EvaluateRunResult as EvaluateRunResult
+    from .pipeline import evaluate_run as evaluate_run
+    from .pipeline import train_run as train_run
     from .runs import Run as Run
     from .runs import load_run as load_run
     from .train import EpochRecord as EpochRecord
     from .train import TrainResult as TrainResult
     from .train import predict as predict
     from .train import prepare as prepare
-    from .train import train as train
 
 
 def __getattr__(name: str) -> Any:
@@ -114,16 +124,3 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_SOURCES))
-
-
-class _Package(types.ModuleType):
-    """This package's module type: importing the submodules ``evaluate`` and ``train``
-    does not bind them over the functions of the same name (as the eager imports did)."""
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if _SOURCES.get(name) == name and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package

@@ -40,7 +40,7 @@ import csv
 import io
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -176,6 +176,8 @@ class Comparison:
     inputs: list[dict[str, Any]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     targets: dict[str, float] = field(default_factory=dict)
+    files: ComparisonFiles | None = None
+    """compare.png, .csv and .json where :func:`compare_runs` wrote them."""
 
     def targets_text(self) -> str:
         """``motion >= 94.8 %, speed_cm_s MAE <= 3.4`` (empty without targets)."""
@@ -708,8 +710,47 @@ def write_comparison(cmp: Comparison, out_dir: str | Path, *, command: str | Non
     return ComparisonFiles(out / COMPARE_PNG, out / COMPARE_CSV, out / COMPARE_JSON)
 
 
+def parse_targets(items: Sequence[str]) -> dict[str, float]:
+    """``["motion=0.948", "speed_cm_s=3.4"]`` -> ``{"motion": 0.948, "speed_cm_s": 3.4}``."""
+    out: dict[str, float] = {}
+    for item in items:
+        head, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not head.strip() or not math.isfinite(number):
+            raise InputError(f"`targets` {item!r}: give HEAD=VALUE, e.g. motion=0.948")
+        if head.strip() in out:
+            raise InputError(f"`targets` {head.strip()!r} given twice")
+        out[head.strip()] = number
+    return out
+
+
+def compare_runs(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
+                 margin_pp: float = 0.5, metric: str = "accuracy",
+                 targets: Mapping[str, float] | Sequence[str] | None = None,
+                 out_dir: str | Path | None = None, command: str | None = None
+                 ) -> Comparison:
+    """What ``tactile compare`` does: :func:`compare` the runs (``targets`` as a mapping
+    or as ``HEAD=VALUE`` strings) and, with ``out_dir``, write compare.png, .csv and .json
+    there (:func:`write_comparison`; the comparison's ``files``). The output folder is
+    checked before the runs are read."""
+    from ..input_guard import check_outputs
+
+    wanted = dict(targets) if isinstance(targets, Mapping) else parse_targets(targets or [])
+    if out_dir is not None:
+        check_outputs({"out_dir": out_dir}, [Path(d) / runs.RUN_JSON for d in run_dirs])
+        check_output_folder(out_dir, merge=True)
+    cmp = compare(run_dirs, data_name=data_name, margin_pp=margin_pp, metric=metric,
+                  targets=wanted)
+    if out_dir is not None:
+        cmp.files = write_comparison(cmp, out_dir, command=command)
+    return cmp
+
+
 __all__ = ["COMPARE_CSV", "COMPARE_JSON", "COMPARE_PNG", "Comparison", "ComparisonFiles",
            "RunPoint", "check_run_folder", "choose_data_name", "compare", "compare_points",
-           "comparison_record", "distinct_run_paths", "eval_names", "pareto_front",
-           "pick_fastest", "pick_needed", "plot_comparison", "read_point", "run_labels",
-           "table_rows", "within_margin", "write_comparison"]
+           "compare_runs", "comparison_record", "distinct_run_paths", "eval_names",
+           "parse_targets", "pareto_front", "pick_fastest", "pick_needed", "plot_comparison",
+           "read_point", "run_labels", "table_rows", "within_margin", "write_comparison"]

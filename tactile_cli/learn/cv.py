@@ -47,9 +47,15 @@ import torch
 
 from .._version import __version__
 from ..errors import InputError
-from ..store.atomic import swap_into_place, write_text
+from ..interrupt import raise_if_requested
+from ..store.atomic import (
+    remove_stale_temporaries,
+    swap_into_place,
+    write_error,
+    write_text,
+)
 from ..store.origin import data_origin
-from ..store.outdir import check_output_folder, output_folder
+from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .config import TrainConfig, parse_config
@@ -189,9 +195,11 @@ def train_cv(
     finished = _resume(partial, record, overwrite)
     if on_plan is not None:
         on_plan(plan, finished)
-    partial.mkdir(parents=True, exist_ok=True)
+    try:
+        (partial / FOLDS_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(exc, partial) from None
     runs.write_json(partial / PLAN_JSON, record, overwrite=True)
-    (partial / FOLDS_DIR).mkdir(exist_ok=True)
     command = command if command is not None else current_command()
     todo = [f for f in plan.folds if f.index not in finished]
     jobs = default_jobs(len(todo), config.optim.threads) if jobs is None else max(1, jobs)
@@ -217,15 +225,15 @@ def train_cv(
                 pool.submit(_train_fold, *args(f)): f.index for f in todo}
             try:
                 while pending:
-                    done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    raise_if_requested()  # Ctrl-C: noticed within a poll, not after the folds
+                    done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
                     for fut in done:
                         index = pending.pop(fut)
                         summaries[index] = fut.result()
                         if on_fold is not None:
                             on_fold(index, summaries[index])
             except BaseException:
-                for fut in pending:
-                    fut.cancel()
+                _stop_pool(pool, [partial / FOLDS_DIR / fold_name(f.index) for f in todo])
                 raise
     for index in finished:
         info = runs.read_run_info(partial / FOLDS_DIR / fold_name(index))
@@ -238,14 +246,28 @@ def train_cv(
     info["wall_time_s"] = time.perf_counter() - started
     runs.write_json(partial / runs.RUN_JSON, info, overwrite=True)
     write_text(partial / runs.CONFIG_YAML, config.as_yaml(), overwrite=True)
-    with output_folder(out, overwrite=overwrite) as tmp:
-        for entry in partial.iterdir():
-            swap_into_place(entry, tmp / entry.name)
-    shutil.rmtree(partial, ignore_errors=True)
+    if out.exists() and not overwrite:  # appeared while we worked
+        raise InputError("output folder exists; pass `overwrite=True` to replace it", path=out)
+    # the finished folder becomes RUN in one rename (an earlier RUN is replaced only now);
+    # until then a stop keeps every finished fold in `partial` for the next try
+    swap_into_place(partial, out)
     return CvTrainResult(out, config.model.family, plan.k, len(plan.folds), plan.mode, plan.by,
                          sorted(finished), [f.index for f in todo], jobs,
                          info["wall_time_s"], list(plan.warnings),
                          [{"fold": i, **summaries[i]} for i in sorted(summaries)])
+
+
+def _stop_pool(pool: ProcessPoolExecutor, fold_dirs: Sequence[Path]) -> None:
+    """Stop the fold processes at once (a fold under way is lost, the finished ones stay in
+    the partial folder) and remove the temporary folders they leave."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        proc.terminate()
+    for proc in procs:
+        proc.join(timeout=10)
+    for folder in fold_dirs:
+        remove_stale_temporaries(folder)
 
 
 def _resume(partial: Path, record: dict[str, Any], overwrite: bool) -> list[int]:

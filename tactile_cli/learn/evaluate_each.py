@@ -22,7 +22,11 @@ from typing import Any, Literal
 from ..batch import FileBatchResult, FileCounts, FileItem, newest_mtime, run_each
 from ..config_file import missing_file_error
 from ..errors import InputError
+from ..input_guard import check_outputs
+from ..store.atomic import remove_stale_temporaries
+from ..store.outdir import check_output_folder
 from ..store.provenance import current_command
+from ..threads import check_threads
 from . import runs
 
 #: Why the batch has no latency figures (in each item's notes and the command's output).
@@ -41,6 +45,20 @@ def _summary(result: Any) -> dict[str, Any]:
         else:
             heads[m.head] = {"mae": m.mae, "rmse": m.rmse}
     return {"n_trials": result.n_trials, "n_windows": result.n_windows, "heads": heads}
+
+
+def describe_item(item: FileItem) -> str:
+    """What a finished file's line says after ``INPUT: ok``: its results folder and each
+    head's accuracy or MAE."""
+    from .tables import pct
+
+    parts = []
+    for head, m in item.value["summary"]["heads"].items():
+        if "mae" in m:
+            parts.append(f"{head} MAE " + ("n/a" if m["mae"] is None else f"{m['mae']:.4g}"))
+        else:
+            parts.append(f"{head} {pct(m['accuracy'])}")
+    return f"-> {item.output} ({', '.join(parts)})"
 
 
 def evaluate_task(spec: dict[str, Any]) -> dict[str, Any]:
@@ -81,6 +99,8 @@ def evaluate_each(
     any work: a run folder that does not load, a missing data file, two files of one
     stem (one results folder)."""
     run_dir = Path(run_dir)
+    if workers:  # 0: in this process
+        check_threads(workers, "workers")
     info = runs.read_run_info(run_dir)  # a damaged run fails here, once, not per file
     if info.get("cv") is None:
         runs.load_run(run_dir)
@@ -98,6 +118,9 @@ def evaluate_each(
             raise InputError(f"{str(seen[name])!r} and {str(path)!r} would both be written "
                              f"to {runs.EVAL_DIR}/{name}; rename one", path=path)
         seen[name] = path
+    eval_dir = run_dir / runs.EVAL_DIR
+    check_outputs([eval_dir / name for name in seen], paths)
+    check_output_folder(eval_dir, merge=True)  # a file there, or a folder not writable
     model_mtime = max(newest_mtime(p) for p in (run_dir / runs.MODEL_PT,
                                                run_dir / runs.RUN_JSON) if p.exists())
     items = []
@@ -110,14 +133,18 @@ def evaluate_each(
     if on_plan is not None:
         on_plan(items)
     command = command if command is not None else current_command()
-    return run_each(evaluate_task, items,
-                    lambda item: {"run": str(run_dir), "input": item.input, "split": split,
-                                  "name": Path(item.output).name,
-                                  # an out-of-date evaluation is replaced, as ingest does
-                                  "overwrite": True, "command": command},
-                    verb="evaluate", out_dir=str(run_dir / runs.EVAL_DIR),
-                    scheduler=scheduler, workers=workers, on_progress=on_progress,
-                    on_item=on_item)
+    try:
+        return run_each(evaluate_task, items,
+                        lambda item: {"run": str(run_dir), "input": item.input,
+                                      "split": split, "name": Path(item.output).name,
+                                      # an out-of-date evaluation is replaced, as ingest does
+                                      "overwrite": True, "command": command},
+                        verb="evaluate", out_dir=str(eval_dir), scheduler=scheduler,
+                        workers=workers, on_progress=on_progress, on_item=on_item)
+    except BaseException:  # stopped: the temporary folders of the killed workers' tasks
+        for item in items:
+            remove_stale_temporaries(Path(item.output))
+        raise
 
 
-__all__ = ["NO_LATENCY", "evaluate_each", "evaluate_task"]
+__all__ = ["NO_LATENCY", "describe_item", "evaluate_each", "evaluate_task"]

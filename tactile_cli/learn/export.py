@@ -42,6 +42,7 @@ from torch import Tensor, nn
 
 from .._version import __version__
 from ..errors import InputError
+from ..input_guard import check_outputs
 from ..store.atomic import atomic_file, check_output_file
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
@@ -305,6 +306,8 @@ def export_run(run_dir: str | Path, out: str | Path, *,
     the format cannot carry is an InputError before anything is written."""
     if format not in FORMATS:
         raise InputError(f"`format` (={format!r}) must be one of {', '.join(FORMATS)}")
+    for target in (out, sidecar_path(out)):  # the model file and its sidecar
+        check_outputs({"out": target}, runs.run_files(run_dir))
     out = check_output_file(out, overwrite=overwrite)
     side = check_output_file(sidecar_path(out), overwrite=overwrite)
     run = runs.load_run(run_dir)

@@ -19,6 +19,8 @@ import numpy as np
 import torch
 from torch import nn
 
+from ..threads import check_threads
+
 
 @dataclass(frozen=True)
 class LatencyStats:
@@ -73,7 +75,7 @@ def measure_latency(model: nn.Module, windows: np.ndarray, *, threads: int | Non
     """
     if windows.ndim != 3 or windows.shape[0] == 0:
         raise ValueError(f"`windows` must be (n >= 1, window, channels), got {windows.shape}")
-    threads = 1 if threads is None else int(threads)
+    threads = 1 if threads is None else check_threads(threads, "threads")
     previous = torch.get_num_threads()
     was_training = model.training
     model.eval()

@@ -415,10 +415,20 @@ def resolve_kinds(kinds: Sequence[str], *, event_counts: bool) -> list[str]:
     return out
 
 
+#: At most this many levels per kind (each is a whole evaluation of the data).
+MAX_LEVELS = 100
+#: Time factors of ``scale`` between these (a factor of 1e6 asks for a million times the
+#: data in memory; see also the memory estimate in :func:`perturb_evaluate`).
+SCALE_RANGE = (1e-3, 1e3)
+
+
 def _check_levels(kind: str, levels: Sequence[float]) -> list[float]:
     lv = [float(v) for v in levels]
     if not lv:
         raise InputError(f"no levels for {kind}")
+    if len(lv) > MAX_LEVELS:
+        raise InputError(f"{len(lv)} {kind} levels: at most {MAX_LEVELS} (each is a whole "
+                         "evaluation of the data)")
     bad: list[float] = []
     if kind == "lowpass":
         bad = [v for v in lv if not 0 < v < 1]
@@ -427,8 +437,8 @@ def _check_levels(kind: str, levels: Sequence[float]) -> list[float]:
         bad = [v for v in lv if not 0 <= v < 1]
         rule = "a fraction in [0, 1)"
     elif kind == "scale":
-        bad = [v for v in lv if not (0 < v and math.isfinite(v))]
-        rule = "a time factor > 0"
+        bad = [v for v in lv if not SCALE_RANGE[0] <= v <= SCALE_RANGE[1]]
+        rule = f"a time factor from {SCALE_RANGE[0]:g} to {SCALE_RANGE[1]:g}"
     else:
         bad = [v for v in lv if not math.isfinite(v)]
         rule = "a finite SNR in dB"
@@ -488,6 +498,19 @@ def _thin_channels(x: np.ndarray, channels: list[str], keep: float, seed: list[i
         pos, neg = y[:, channels.index("positive")], y[:, channels.index("negative")]
         y[:, channels.index("net")] = pos - neg
     return y
+
+
+def _check_scale_memory(trials: Sequence[Any], factors: Sequence[float]) -> None:
+    """Refuse time factors whose stretched copy of the data cannot fit in memory (the
+    copy of every trial is held at once, float64)."""
+    from ..config_file import check_fits_in_memory
+
+    if not factors:
+        return
+    values = sum(int(np.prod(t.x.shape)) for t in trials)
+    check_fits_in_memory(8.0 * values * max(factors), f"`levels` scale={max(factors):g}",
+                         "for the time-scaled copy of the data", path=None, text=None,
+                         keys=())
 
 
 @dataclass
@@ -574,6 +597,7 @@ def perturb_evaluate(
         plan[k] = _check_levels(k, DEFAULT_LEVELS[k] if given is None else given)
 
     trials = read_trials(paths, cfg.data, trained=True)
+    _check_scale_memory(trials, plan.get("scale", []))
     spec, input_notes = checked_input(trials, cfg.data.stream, run_obj.input, run_obj.path)
     check_heads_match(run_obj.heads, trials, stream=cfg.data.stream)
     if split == "test":
@@ -805,10 +829,123 @@ def plot_perturbations(results: Sequence[PerturbResult]) -> bytes:
     return buf.getvalue()
 
 
+# -- the verb of `tactile perturb` ----------------------------------------------------------------
+def parse_threshold(text: str) -> tuple[float | None, float]:
+    """``"0.9x"`` -> (None, 0.9): relative to the clean accuracy; ``"0.95"`` or ``"95%"``
+    -> (0.95, 0.9): an absolute accuracy. Returns (absolute, relative) as
+    :func:`perturb_evaluate` takes them."""
+    t = text.strip().lower()
+    try:
+        if t.endswith("x"):
+            rel = float(t[:-1])
+            if not 0 < rel <= 1:
+                raise ValueError
+            return None, rel
+        value = float(t[:-1]) / 100 if t.endswith("%") else float(t)
+    except ValueError:
+        raise InputError(f"`threshold` must be a factor of the clean accuracy like 0.9x or an "
+                         f"accuracy like 0.95 or 95%, got {text!r}") from None
+    if not 0 <= value <= 1:
+        raise InputError(f"`threshold` {text!r} is not an accuracy in [0, 1] (or 0-100 %)")
+    return value, 0.9
+
+
+def parse_levels(items: Sequence[str] | Mapping[str, Sequence[float]] | None
+                 ) -> dict[str, list[float]]:
+    """``["noise=30,20,10", "scale=0.5,2"]`` -> {"noise": [30, 20, 10], "scale": [0.5, 2]}
+    (a mapping is taken as it is)."""
+    if isinstance(items, Mapping):
+        return {k: [float(v) for v in vs] for k, vs in items.items()}
+    out: dict[str, list[float]] = {}
+    for item in items or []:
+        kind, sep, values = item.partition("=")
+        try:
+            if not sep or not kind.strip():
+                raise ValueError
+            out[kind.strip()] = [float(v) for v in values.split(",") if v.strip()]
+        except ValueError:
+            raise InputError(f"`levels` takes KIND=V1,V2,... (e.g. noise=30,20,10), got "
+                             f"{item!r}") from None
+    return out
+
+
+@dataclass
+class PerturbRunsResult:
+    """What ``tactile perturb`` reports: one result per run (each written to
+    ``RUN/perturb/<name>/``) and the files of the combined chart, when ``out`` was given."""
+
+    results: list[PerturbResult]
+    chart: dict[str, Path] | None = None
+
+    @property
+    def notes(self) -> list[str]:
+        return [n for r in self.results for n in r.notes]
+
+    def as_dict(self) -> dict[str, Any] | list[dict[str, Any]]:
+        """perturb.json of the one run, or the list of every run's."""
+        payload = [r.as_dict() for r in self.results]
+        return payload[0] if len(payload) == 1 else payload
+
+
+def perturb_runs(
+    run_dirs: Sequence[str | Path],
+    data_paths: Sequence[str | Path],
+    *,
+    kinds: Sequence[str] | str = DEFAULT_KINDS,
+    levels: Sequence[str] | Mapping[str, Sequence[float]] | None = None,
+    threshold: str = "0.9x",
+    split: Literal["all", "test"] = "all",
+    seed: int = 0,
+    name: str | None = None,
+    out: str | Path | None = None,
+    command: str | None = None,
+    on_run: Callable[[Path], None] | None = None,
+    on_level: Callable[[str, float, float], None] | None = None,
+) -> PerturbRunsResult:
+    """:func:`perturb_evaluate` for every run of ``run_dirs`` on ``data_paths`` (each
+    writes ``RUN/perturb/<name>/``), and the combined chart of all of them in folder
+    ``out`` when given (:func:`write_perturbation_set`). ``kinds``: names or one
+    comma-separated string; ``levels``: kind -> levels, or ``KIND=V1,V2`` strings;
+    ``threshold``: see :func:`parse_threshold`. Every option and output is checked before
+    the first run is evaluated; ``on_run`` and ``on_level`` report progress."""
+    from ..input_guard import check_outputs
+
+    if not run_dirs:
+        raise InputError("no run folder; give `run_dirs`")
+    if not data_paths:
+        raise InputError("no data files; give `data_paths`")
+    kind_list = [k for k in (kinds.split(",") if isinstance(kinds, str) else kinds)
+                 if k.strip()]
+    absolute, relative = parse_threshold(threshold)
+    level_map = parse_levels(levels)
+    if split not in ("all", "test"):
+        raise InputError(f"`split` must be all or test, got {split!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"`seed` (={seed!r}) must be a whole number >= 0")
+    folder = runs.check_result_name(name) or runs.eval_dir_name([Path(p) for p in data_paths],
+                                                                split)
+    for run in run_dirs:
+        check_outputs({"out": out, "name": Path(run) / PERTURB_DIR / folder}, data_paths)
+    if out is not None:  # the chart is added to an existing folder; a file there is refused
+        check_output_folder(out, merge=True)
+    results = []
+    for run in run_dirs:
+        if on_run is not None:
+            on_run(Path(run))
+        results.append(perturb_evaluate(
+            run, data_paths, kind_list, level_map, absolute, relative_threshold=relative,
+            split=split, seed=seed, name=name, command=command, on_level=on_level))
+    chart = None
+    if out is not None:
+        chart = write_perturbation_set(results, out, command=command)
+    return PerturbRunsResult(results, chart)
+
+
 __all__ = ["DEFAULT_KINDS", "DEFAULT_LEVELS", "KINDS", "PERTURB_CSV", "PERTURB_DIR",
            "PERTURB_JSON", "PERTURB_PNG", "BreakPoint", "Direction", "KindResult",
            "LevelResult", "PerturbResult", "add_noise", "breaking_index", "directions",
            "drop_samples", "find_perturbations", "level_text", "load_perturbation", "lowpass",
-           "lowpass_cutoffs", "perturb_evaluate", "perturb_trial", "perturbation_rows",
-           "plot_perturbations", "resolve_kinds", "scale_time", "thin_counts",
-           "write_perturbation", "write_perturbation_set"]
+           "lowpass_cutoffs", "parse_levels", "parse_threshold", "perturb_evaluate",
+           "perturb_runs", "perturb_trial", "perturbation_rows", "plot_perturbations",
+           "resolve_kinds", "scale_time", "thin_counts", "write_perturbation",
+           "write_perturbation_set", "PerturbRunsResult"]

@@ -50,6 +50,7 @@ from typing import Any
 
 from .._version import __version__
 from ..errors import InputError, TactileError
+from ..input_guard import check_outputs
 from ..store.atomic import write_text
 from ..store.origin import UNKNOWN, data_origin, describe_origin, unknown_origin
 from ..store.outdir import check_output_folder, output_folder
@@ -880,6 +881,8 @@ def build_report(
     Raises :class:`InputError` before writing anything when a run folder, data file or
     figure folder is missing."""
     dirs, datas, figs = _check_inputs(run_dirs, data_paths, figure_dirs)
+    check_outputs({"out_dir": out_dir}, [*(d / runs.RUN_JSON for d in dirs), *datas],
+                  trees=figs)
     out = check_output_folder(out_dir, merge=True)  # added to; a file there is refused
 
     inputs, origins = _Inputs(), _Origins()

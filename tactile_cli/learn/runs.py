@@ -441,9 +441,28 @@ def eval_dir_name(data_paths: list[Path], split: str) -> str:
     return f"{name}.{split}" if split != "all" else name
 
 
+def check_result_name(name: str | None, argument: str = "name") -> str | None:
+    """``name`` of a results folder (``RUN/eval/<name>``, ``RUN/perturb/<name>``) if it is
+    one plain folder name: not empty, no ``/`` or ``\\``, not ``.`` or ``..`` (which would
+    put the results outside their folder); one :class:`InputError` otherwise."""
+    if name is not None and (not name.strip() or name in (".", "..")
+                             or any(c in name for c in "/\\\0")):
+        raise InputError(f"`{argument}` (={name!r}) must be a plain folder name (no / or \\, "
+                         "not . or ..)")
+    return name
+
+
+def run_files(path: str | Path) -> list[Path]:
+    """The files directly in a run folder (run.json, model.pt, ...): the inputs no output
+    may replace (``RUN/eval/`` and ``RUN/perturb/`` may be written). Empty when ``path`` is
+    not a folder."""
+    path = Path(path)
+    return sorted(p for p in path.iterdir() if p.is_file()) if path.is_dir() else []
+
+
 __all__ = ["CONFIG_YAML", "CURVES_PNG", "EVAL_DIR", "EVAL_FORMAT", "EVAL_FORMAT_VERSION",
            "HISTORY_CSV", "METRICS_JSON", "MODEL_PT", "NORMALISATION_JSON", "PREDICTIONS_CSV",
            "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "checked_record",
            "dumps",
            "eval_dir_name", "json_safe", "load_run", "read_metrics", "read_run_config",
-           "read_run_info", "write_folder", "write_json"]
+           "check_result_name", "read_run_info", "run_files", "write_folder", "write_json"]

@@ -63,9 +63,17 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from .._version import __version__
 from ..config_file import load_yaml_model, read_yaml
 from ..errors import InputError
-from ..store.atomic import write_bytes, write_text
+from ..input_guard import check_outputs
+from ..store.atomic import (
+    remove_stale_temporaries,
+    swap_into_place,
+    write_bytes,
+    write_error,
+    write_text,
+)
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
+from ..threads import check_threads
 from ..vocabulary import CHANNEL_SETS
 from . import runs
 from .compare import meets_targets, pareto_front, pick_needed, within_margin
@@ -393,6 +401,9 @@ class SweepCounts:
     skipped: int
     na: int
 
+    def text(self) -> str:
+        return f"{self.done}/{self.total} done, {self.running} running, {self.failed} failed"
+
 
 @dataclass
 class SweepResult:
@@ -418,6 +429,14 @@ class SweepResult:
         out = asdict(self)
         out["out_dir"] = str(self.out_dir)
         return out
+
+    def text(self) -> str:
+        """What ``tactile sweep`` prints: the table (markdown, as in table.md), the summary
+        line, the notes and the files written."""
+        notes = "".join(f"note: {note}\n" for note in self.notes)
+        return (table_markdown(self.rows, self.heads) + self.summary() + "\n" + notes
+                + f"wrote {self.out_dir}: sweep.json, table.csv, table.md, "
+                "sweep_results.json, accuracy_vs_window.png, speed_accuracy.png, runs/\n")
 
     def summary(self) -> str:
         text = (f"{self.name}: {self.n_ok} ok ({self.n_skipped} finished before), "
@@ -450,8 +469,33 @@ def plan_sweep(config: SweepConfig, *, path: str | Path | None = None,
     return planned, train_paths, eval_paths
 
 
+def partial_dir(out: Path) -> Path:
+    """Where a sweep with ``overwrite`` builds its result beside an earlier one at ``out``
+    (kept when stopped, resumed by the next such sweep, put in place when complete)."""
+    return out.with_name(f".{out.name}.sweep-partial")
+
+
+def _declare(config: SweepConfig, out: Path, config_path: str | Path | None,
+             train_paths: Sequence[Path], eval_paths: Sequence[Path]) -> None:
+    """Refuse an output folder that is, contains or lies inside an input (the sweep file,
+    the model configs, the data)."""
+    inputs = [Path(spec.config) for spec in config.models.values()]
+    inputs += [*train_paths, *eval_paths] + ([] if config_path is None else [Path(config_path)])
+    check_outputs({"out": out}, inputs)
+    check_outputs({"out": partial_dir(out)}, inputs)
+
+
+def _remove_task_leftovers(work: Path, names: Sequence[str], eval_name: str) -> None:
+    """After a stop: the temporary folders of tasks whose worker processes were killed
+    (their own clean-up never ran), each only once its process is gone."""
+    for name in names:
+        run_dir = work / RUNS_DIR / name
+        remove_stale_temporaries(run_dir)
+        remove_stale_temporaries(run_dir / runs.EVAL_DIR / eval_name)
+
+
 def run_sweep(
-    config: SweepConfig,
+    config: SweepConfig | str | Path,
     out: str | Path,
     *,
     config_path: str | Path | None = None,
@@ -464,26 +508,43 @@ def run_sweep(
     on_plan: Callable[[list[PlannedRun]], None] | None = None,
     on_progress: Callable[[SweepCounts], None] | None = None,
     on_run: Callable[[str, bool, str | None], None] | None = None,
+    on_line: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Plan, run (on Dask: see :func:`tactile_cli.batch.map_tasks` for ``scheduler`` and
     ``workers``), collect and chart a sweep into folder ``out``.
 
     ``out`` may hold an earlier run of the sweep (its finished runs are skipped); another
-    non-empty folder is an error unless ``overwrite``, which also runs every run again.
-    ``on_plan`` gets the grid once planned, ``on_progress`` the counts, ``on_run`` each
-    run's name, success and error as it ends.
+    non-empty folder is an error unless ``overwrite``. With ``overwrite``, every run runs
+    again in a folder beside ``out`` (:func:`partial_dir`), which replaces ``out`` only
+    when the sweep is complete: a stopped sweep leaves ``out`` as it was, and the next
+    sweep with ``overwrite`` resumes there, skipping the runs it finished. ``on_plan`` gets
+    the grid once planned, ``on_progress`` the counts, ``on_run`` each run's name, success
+    and error as it ends, ``on_line`` the same as lines for people. ``config``: the sweep
+    file (its path then stands for ``config_path``) or a loaded one. A failed run is a row
+    of the result (``n_failed``), never an exception.
     """
     from ..batch import SCHEDULER_ENV, default_workers, map_tasks
 
     started = time.perf_counter()
+    if workers:  # 0: in this process
+        check_threads(workers, "workers")
+    if not isinstance(config, SweepConfig):
+        config_path = config
+        config = load_sweep(config)
     out = Path(out)
     check_output_folder(out, merge=True)
-    if out.is_dir() and any(out.iterdir()) and not (out / SWEEP_JSON).is_file() \
-            and not overwrite:
+    occupied = out.is_dir() and any(out.iterdir())
+    if occupied and not (out / SWEEP_JSON).is_file() and not overwrite:
         raise InputError("output folder exists, is not empty and holds no sweep.json; give "
                          "an empty or new folder, or pass `overwrite=True`", path=out)
     planned, train_paths, eval_paths = plan_sweep(config, path=config_path,
                                                   train_data=train_data, eval_data=eval_data)
+    _declare(config, out, config_path, train_paths, eval_paths)
+    work = partial_dir(out) if overwrite and occupied else out
+    notes = []
+    if work == out and partial_dir(out).exists():
+        notes.append(f"{partial_dir(out)} holds a stopped sweep with `overwrite=True`; run "
+                     "that again to finish it, or delete it")
     heads = _heads(planned)
     score_head = _check_targets(config, heads, config_path)
     command = command if command is not None else current_command()
@@ -491,9 +552,9 @@ def run_sweep(
     eval_records = [_file_record(p) for p in eval_paths]
     eval_name = runs.eval_dir_name(eval_paths, config.eval.split)
     train_sha = [r["sha256"] for r in train_records]
-    for run in planned:
-        if run.status == "todo" and not overwrite and is_finished(
-                out / RUNS_DIR / run.name, run, eval_name, train_sha):
+    for run in planned:  # with `overwrite`, only the runs of the stopped sweep beside `out`
+        if run.status == "todo" and (work != out or not overwrite) and is_finished(
+                work / RUNS_DIR / run.name, run, eval_name, train_sha):
             run.status = "finished"
     address = scheduler or os.environ.get(SCHEDULER_ENV) or None
     todo = [r for r in planned if r.status == "todo"]
@@ -514,36 +575,51 @@ def run_sweep(
         "model_configs": model_records, "where": where,
         "runs": [r.as_dict() for r in planned],
     }
-    (out / RUNS_DIR).mkdir(parents=True, exist_ok=True)
-    write_text(out / SWEEP_JSON, runs.dumps(plan) + "\n", overwrite=True)
+    try:
+        (work / RUNS_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_error(exc, work) from None
+    write_text(work / SWEEP_JSON, runs.dumps(plan) + "\n", overwrite=True)
     if on_plan is not None:
         on_plan(planned)
+    if on_line is not None:
+        n = {st: sum(r.status == st for r in planned) for st in ("todo", "finished", "n/a")}
+        on_line(f"sweep {config.name}: {len(planned)} runs in the grid: {n['todo']} to run, "
+                f"{n['finished']} finished before (skipped), {n['n/a']} n/a")
     n_skipped = sum(r.status == "finished" for r in planned)
     n_na = sum(r.status == "n/a" for r in planned)
     errors: dict[str, str] = {}
-    seconds: dict[str, float] = {}
 
     def progress(c: Any) -> None:
         if on_progress is not None:
             on_progress(SweepCounts(c.total, c.done, c.running, c.failed, n_skipped, n_na))
 
-    specs = [task_spec(r, out=out, train_data=train_paths, eval_data=eval_paths,
+    specs = [task_spec(r, out=work, train_data=train_paths, eval_data=eval_paths,
                        split=config.eval.split, eval_name=eval_name, command=command)
              for r in todo]
     if not todo:
         progress(_Counts(0, 0, 0, 0))
-    for res in map_tasks(run_one, specs, keys=[r.name for r in todo], scheduler=address,
-                         workers=n_workers, on_progress=progress):
-        run = todo[res.index]
-        run.status = "ok" if res.ok else "failed"
-        seconds[run.name] = res.seconds
-        if not res.ok:
-            errors[run.name] = res.error or "failed"
-        if on_run is not None:
-            on_run(run.name, res.ok, res.error)
-    return collect(config, planned, out, heads=heads, score_head=score_head,
-                   eval_name=eval_name, errors=errors, where=where, command=command,
-                   plan=plan, started=started)
+    try:
+        for res in map_tasks(run_one, specs, keys=[r.name for r in todo], scheduler=address,
+                             workers=n_workers, on_progress=progress):
+            run = todo[res.index]
+            run.status = "ok" if res.ok else "failed"
+            if not res.ok:
+                errors[run.name] = res.error or "failed"
+            if on_run is not None:
+                on_run(run.name, res.ok, res.error)
+            if on_line is not None:
+                on_line(f"{run.name}: ok" if res.ok else f"{run.name}: failed: {res.error}")
+    except BaseException:
+        _remove_task_leftovers(work, [r.name for r in todo], eval_name)
+        raise
+    result = collect(config, planned, work, heads=heads, score_head=score_head,
+                     eval_name=eval_name, errors=errors, where=where, command=command,
+                     plan=plan, started=started, out_dir=out)
+    result.notes = notes + result.notes
+    if work != out:
+        swap_into_place(work, out)  # the earlier sweep is replaced only now
+    return result
 
 
 @dataclass(frozen=True)
@@ -800,9 +876,11 @@ def plot_speed_accuracy(rows: list[dict[str, Any]], score_head: str | None,
 def collect(config: SweepConfig, planned: list[PlannedRun], out: Path, *,
             heads: dict[str, str], score_head: str | None, eval_name: str,
             errors: dict[str, str], where: str, command: str, plan: dict[str, Any],
-            started: float) -> SweepResult:
-    """Read every finished run's evaluation into the table, pick, chart and write the
-    outputs (each file atomically)."""
+            started: float, out_dir: Path | None = None) -> SweepResult:
+    """Read every finished run's evaluation in folder ``out`` into the table, pick, chart
+    and write the outputs there (each file atomically); ``out_dir``: where the folder will
+    be when complete (default ``out``), as the result and sweep_results.json name it."""
+    final = out if out_dir is None else out_dir
     rows = [_row(r, out, eval_name, heads, errors.get(r.name)) for r in planned]
     pick, pareto = pick_run(rows, targets=dict(config.targets), heads=heads,
                             score_head=score_head, margin_pp=config.margin_pp)
@@ -812,8 +890,8 @@ def collect(config: SweepConfig, planned: list[PlannedRun], out: Path, *,
     files = {"plan": SWEEP_JSON, "csv": TABLE_CSV, "markdown": TABLE_MD,
              "results": RESULTS_JSON, "windows_png": FIG_WINDOWS, "speed_png": FIG_SPEED}
     result = SweepResult(
-        out_dir=out, name=config.name, rows=rows, heads=heads, score_head=score_head,
-        pick=pick, pareto=pareto, files={k: str(out / v) for k, v in files.items()},
+        out_dir=final, name=config.name, rows=rows, heads=heads, score_head=score_head,
+        pick=pick, pareto=pareto, files={k: str(final / v) for k, v in files.items()},
         where=where, wall_time_s=time.perf_counter() - started,
         n_ok=sum(r["status"] == "ok" for r in rows),
         n_failed=sum(r["status"] == "failed" for r in rows),
@@ -842,5 +920,6 @@ def collect(config: SweepConfig, planned: list[PlannedRun], out: Path, *,
 __all__ = ["FIG_SPEED", "FIG_WINDOWS", "RESULTS_JSON", "SWEEP_JSON", "TABLE_CSV", "TABLE_MD",
            "ModelSpec", "PlannedRun", "SweepConfig", "SweepCounts", "SweepResult",
            "apply_overrides", "collect", "expand_grid", "is_finished", "load_sweep",
+           "partial_dir",
            "pick_run", "plan_sweep", "plot_speed_accuracy", "plot_windows", "run_name",
            "run_one", "run_sweep", "table_markdown", "task_spec"]

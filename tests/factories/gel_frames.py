@@ -198,10 +198,11 @@ _RUNS: dict[tuple[str, str], Path] = {}
 
 def normal_run(folder: Path, *, channels: str = "x, y, dR, dG, dB") -> Path:
     """A small normal network (5-32-32-32-3, 3 epochs on :func:`make_pixel_table`) trained
-    once per process and folder by ``tactile_cli.learn.train``; returns the run folder."""
+    once per process and folder by ``tactile_cli.learn.train.train``; returns the run folder."""
     key = (str(folder), channels)
     if key not in _RUNS:
-        from tactile_cli.learn import parse_config, train
+        from tactile_cli.learn import parse_config
+        from tactile_cli.learn.train import train
 
         folder.mkdir(parents=True, exist_ok=True)
         table = folder / "pixels.h5"

@@ -1029,6 +1029,10 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
 
     add_output_cases(add, case, base)
 
+    from .learn_outputs import add_learn_output_cases
+
+    add_learn_output_cases(add, case, base, REFUSE)
+
     if fresh:
         (corpus_dir / ".complete").write_text("ok\n")
     return corpus

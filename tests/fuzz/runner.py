@@ -225,12 +225,17 @@ def run_case(corpus: Corpus, case: Case, scratch: Path, *, timeout_s: int = 120)
                            and Path(a).exists()})
         before = [tree_hash(p) for p in watched]
         before_skip = [tree_hash(p, ("eval", "perturb")) for p in watched]
+        # the shared valid inputs a case names are inputs too: never written by any case
+        shared = sorted({Path(a) for a in argv if a.startswith(str(corpus.base))
+                         and Path(a).exists()})
+        shared_before = [tree_hash(p) for p in shared]
         listing = _listing(out)
         res = run_argv(argv, cwd=work, timeout_s=timeout_s)
         after = [tree_hash(p) for p in watched]
         after_skip = [tree_hash(p, ("eval", "perturb")) for p in watched]
         outcome, detail = classify(case, res, input_changed=(
-            before != after if res.code != 0 or not writes_input else before_skip != after_skip),
+            before != after if res.code != 0 or not writes_input else before_skip != after_skip)
+            or shared_before != [tree_hash(p) for p in shared],
             leftover=_listing(out) != listing)
         lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
         return Outcome(case.id, case.command, case.mutation, case.damaged, case.expect,

@@ -36,7 +36,7 @@ RATE_PERCENT = {"info": 3, "validate": 4, "plot": 3, "grade": 5, "train": 3, "ev
                 "vibro-model": 5, "detect-contact": 2, "normal-labels": 3, "heightmap": 2,
                 "slip-signal": 3, "monitor": 1, "simulate": 2, "export": 4, "sweep": 5}
 #: kinds run in full: few cases, each a different command (or output option), refused fast
-ALWAYS = ("clash", "symlink", "sacred", "unwritable")
+ALWAYS = ("clash", "symlink", "sacred", "unwritable", "learn-io")
 
 
 def _source_key() -> str:

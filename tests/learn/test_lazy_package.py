@@ -25,13 +25,23 @@ def test_importing_the_split_rules_does_not_import_torch():
     assert out == "False"
 
 
-def test_names_load_on_first_use_and_shadow_their_submodules():
-    out = _run("import sys, types; import tactile_cli.learn.train, tactile_cli.learn.evaluate; "
-               "import tactile_cli.learn as L; from tactile_cli.learn import train, evaluate; "
-               "print(isinstance(train, types.FunctionType), "
-               "isinstance(evaluate, types.FunctionType), L.build_model.__module__, "
-               "sorted(L.__all__) == sorted(set(L.__all__)), 'torch' in sys.modules)")
-    assert out == "True True tactile_cli.learn.models True True"
+def test_one_name_one_meaning_train_and_evaluate_are_modules():
+    """``learn.train`` and ``learn.evaluate`` are the modules, whether or not they were
+    imported first; the verbs are ``train_run`` and ``evaluate_run`` (issue 30, item 5)."""
+    out = _run("import sys, types; import tactile_cli.learn as L; "
+               "first = (isinstance(L.train, types.ModuleType), "
+               "isinstance(L.evaluate, types.ModuleType)); "
+               "import tactile_cli.learn.train, tactile_cli.learn.evaluate; "
+               "from tactile_cli.learn import train, evaluate, train_run, evaluate_run; "
+               "import tactile_cli as tc; "
+               "print(first, train.__name__, evaluate.__name__, "
+               "isinstance(train_run, types.FunctionType), evaluate_run.__module__, "
+               "tc.train_run is train_run, hasattr(tc, 'train'), 'train' in L.__all__, "
+               "L.build_model.__module__, sorted(L.__all__) == sorted(set(L.__all__)), "
+               "'torch' in sys.modules)")
+    assert out == ("(True, True) tactile_cli.learn.train tactile_cli.learn.evaluate True "
+                   "tactile_cli.learn.pipeline True False False tactile_cli.learn.models True "
+                   "True")
 
 
 def test_every_public_name_resolves():

@@ -128,8 +128,9 @@ def test_sweep_on_a_local_cluster_then_restart_on_a_given_scheduler(vibro, tmp_p
     out = tmp_path / "out"
     res = runner.invoke(app, ["sweep", str(path), "--out", str(out), "--workers", "2",
                               "--no-progress"])
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 2, res.output  # two runs failed: exit 2, after the table
     assert "local Dask cluster of 2 worker process(es)" in res.stdout
+    assert "2 ok (0 finished before), 2 failed, 4 n/a" in res.stdout
     rows = _table(out)
     assert [r["status"] for r in rows.values()] == ["ok", "failed", "ok", "failed"] + ["n/a"] * 4
     assert "'Q_x' is not a channel" in rows["fnn-w50-bad"]["error"]
@@ -161,7 +162,7 @@ def test_sweep_on_a_local_cluster_then_restart_on_a_given_scheduler(vibro, tmp_p
                       scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster:
         res = runner.invoke(app, ["sweep", str(path), "--out", str(out), "--scheduler",
                                   cluster.scheduler_address, "--json"])
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 2, res.output
     result = json.loads(res.stdout)
     assert result["where"] == f"Dask scheduler {cluster.scheduler_address}"
     assert result["n_skipped"] == 1 and result["n_ok"] == 2 and result["n_failed"] == 2
@@ -169,31 +170,42 @@ def test_sweep_on_a_local_cluster_then_restart_on_a_given_scheduler(vibro, tmp_p
     assert (out / "runs" / "fnn-w25-Lx" / "model.pt").is_file()
 
 
-def _slow_double(x: int) -> int:
-    time.sleep(0.2 if x else 30)
+def _slow_double(x: int, marker: str | None = None) -> int:
+    if not x:  # the long task: it would leave a mark when it finished
+        time.sleep(60)
+        if marker:
+            Path(marker).write_text("finished")
     if x == 2:
         raise ValueError("two\nis bad")
     return 2 * x
 
 
-def test_map_tasks_reports_failures_and_stops_on_interrupt():
+def _long_or_short(spec: tuple[int, str]) -> int:
+    return _slow_double(*spec)
+
+
+def test_map_tasks_reports_failures_and_stops_on_interrupt(tmp_path: Path):
     results = list(map_tasks(_slow_double, [1, 2, 3], workers=0))
     assert [(r.ok, r.value, r.error) for r in results] == [
         (True, 2, None), (False, None, "ValueError: two"), (True, 6, None)]
-    seen = []
+    seen, got = [], []
 
     def on_progress(c) -> None:
         seen.append(c)
         if c.done:
             interrupt.request()
 
+    marker = tmp_path / "long-task-finished"
     try:
-        started = time.perf_counter()
         with pytest.raises(Interrupted):
-            list(map_tasks(_slow_double, [1, 0], workers=1, on_progress=on_progress))
-        assert time.perf_counter() - started < 25  # task 0 (30 s) did not hold it up
+            for r in map_tasks(_long_or_short, [(1, str(marker)), (0, str(marker))],
+                               workers=1, on_progress=on_progress):
+                got.append(r.key)
     finally:
         interrupt.clear()
+    # the short task's result came back, then the stop: the long task was not waited for
+    # (its worker was stopped before it could finish and leave its mark)
+    assert got == ["task-0"] and not marker.exists()
     assert seen[0].total == 2 and seen[0].running == 1
 
 
@@ -205,3 +217,109 @@ def test_channel_sets_by_name():
         SweepConfig.model_validate(_sweep(channel_sets=["L3R3", "L9"]))
     assert list(load_sweep(CONFIGS / "sweep_vibro.yaml").channel_sets) == [
         "L3R3", "L3", "LxRx", "Lx", "LyRy", "Ly", "LzRz", "Lz"]
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def _one_run_sweep(tmp_path: Path, vibro, **changes) -> Path:
+    train, test = vibro
+    raw = _sweep(train_data=[str(train)], eval={"data": [str(test)], "split": "test"},
+                 models={"fnn": {"config": str(CONFIGS / "train_fnn_vibro.yaml"),
+                                 "overrides": {"model.hidden": [8]}}},
+                 windows=[{"window": 50, "stride": 50}], channel_sets={"Lx": ["L_x"]},
+                 targets={})
+    raw.update(changes)
+    path = tmp_path / "sweep.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return path
+
+
+def test_an_interrupted_overwrite_keeps_the_earlier_sweep_and_a_restart_resumes(
+        vibro, tmp_path: Path, monkeypatch):
+    """Issue 33, item 3: the new sweep is built beside the old one, which is replaced only
+    when the new one is complete; a stopped one resumes there and skips its finished run."""
+    from tactile_cli.learn import sweep as sweep_module
+
+    path = _one_run_sweep(tmp_path, vibro)
+    out = tmp_path / "sw"
+    argv = ["sweep", str(path), "--out", str(out), "--workers", "0", "--no-progress"]
+    assert runner.invoke(app, argv).exit_code == 0
+    before = _tree(out)
+    real = sweep_module.run_one
+
+    def then_ctrl_c(spec):
+        value = real(spec)
+        interrupt.request()  # what the CLI's SIGINT handler does
+        return value
+
+    monkeypatch.setattr(sweep_module, "run_one", then_ctrl_c)
+    res = runner.invoke(app, [*argv, "--overwrite"])
+    assert res.exit_code == 130, res.output
+    assert res.stderr.strip().splitlines()[-1] == (
+        "tactile: error: interrupted; no output was written and earlier outputs are intact")
+    assert _tree(out) == before  # eval/, history.csv, run.json, sweep.json: all as they were
+    partial = sweep_module.partial_dir(out)
+    assert (partial / "runs" / "fnn-w50-Lx" / "run.json").is_file()
+    assert not [p for p in partial.rglob(".*") if ".tmp-" in p.name]
+    monkeypatch.setattr(sweep_module, "run_one", real)
+    res = runner.invoke(app, [*argv, "--overwrite", "--json"])
+    assert res.exit_code == 0, res.output
+    result = json.loads(res.stdout)
+    assert result["n_skipped"] == 1 and result["out_dir"] == str(out)
+    assert not partial.exists() and _tree(out) != before
+    assert json.loads((out / "sweep_results.json").read_text())["out_dir"] == str(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sw", "sweep.yaml"]
+
+
+def test_a_sweep_whose_every_run_failed_exits_2_with_its_table(vibro, tmp_path: Path):
+    path = _one_run_sweep(tmp_path, vibro, channel_sets={"bad": ["Q_x"]})
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw"), "--workers",
+                              "0", "--no-progress"])
+    assert res.exit_code == 2, res.output
+    assert "0 ok (0 finished before), 1 failed, 0 n/a" in res.stdout
+    assert "'Q_x' is not a channel" in (tmp_path / "sw" / "table.md").read_text()
+
+
+@pytest.mark.parametrize("text", ["a: " + "[" * 50_000 + "]" * 50_000 + "\n",
+                                  "".join(f"{' ' * i}k{i}:\n" for i in range(1500))])
+def test_a_sweep_file_nested_too_deep_is_one_line(tmp_path: Path, text: str):
+    path = tmp_path / "sweep.yaml"
+    path.write_text(text)
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    assert len(res.stderr.strip().splitlines()) == 1 and str(path) in res.stderr
+    assert not (tmp_path / "sw").exists()
+
+
+def test_a_sweep_output_holding_its_inputs_or_unwritable_is_refused(vibro, tmp_path: Path,
+                                                                    monkeypatch):
+    import errno
+    import os
+
+    from tactile_cli.store import atomic
+
+    path = _one_run_sweep(tmp_path, vibro)
+    before = _tree(tmp_path)
+    for out in (tmp_path, path):
+        res = runner.invoke(app, ["sweep", str(path), "--out", str(out), "--overwrite",
+                                  "--workers", "0"])
+        assert res.exit_code == 2 and len(res.stderr.strip().splitlines()) == 1, res.output
+    assert "--out contains the input" in res.stderr or "is a file" in res.stderr
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw"), "--workers",
+                              "4096"])
+    assert res.exit_code == 2 and "--workers (=4096) must be a whole number" in res.stderr
+    real_open = os.open
+
+    def refuse(p, flags, *args):
+        if ".tactile-probe" in str(p):
+            raise PermissionError(errno.EACCES, "Permission denied", str(p))
+        return real_open(p, flags, *args)
+
+    monkeypatch.setattr(atomic.os, "open", refuse)
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw"), "--workers",
+                              "0"])
+    assert res.exit_code == 2 and "cannot write in this folder" in res.stderr, res.output
+    assert _tree(tmp_path) == before

@@ -130,7 +130,8 @@ def test_run_with_wrong_heads_is_refused(runs: dict[str, Path]) -> None:
 def test_run_of_another_family_is_refused(runs: dict[str, Path], tmp_path: Path) -> None:
     import yaml
 
-    from tactile_cli.learn import parse_config, train
+    from tactile_cli.learn import parse_config
+    from tactile_cli.learn.train import train
     from tests.factories.gel_frames import TRAIN_YAML
 
     cfg = yaml.safe_load(TRAIN_YAML)
