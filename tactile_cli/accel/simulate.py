@@ -190,7 +190,7 @@ def write_csv(path: Path, accel: np.ndarray, velocity: np.ndarray) -> None:
         np.savetxt(f, table, fmt=fmt, delimiter=",", newline="\n")
 
 
-def ingest_command(out: Path) -> str:
+def ingest_shell_command(out: Path) -> str:
     """The shell command that ingests a scene folder (recorded in its scene.json)."""
     return shlex.join(["tactile", "ingest", str(out), "--format", "accel-tree", "--out",
                        "scene.h5"])
@@ -236,7 +236,7 @@ def simulate_vibro_slip(cfg: VibroSceneConfig, out_dir: str | Path, *, seed: int
                 "command": command if command is not None else current_command(),
                 "config": cfg.model_dump(mode="json"), "columns": list(CSV_COLUMNS),
                 "recordings": truths,
-                "ingest": ingest_command(out),
+                "ingest": ingest_shell_command(out),
             }
             (tmp / "scene.json").write_text(json.dumps(scene, indent=2) + "\n",
                                             encoding="utf-8")
