@@ -10,13 +10,12 @@ from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "run_dir": "--model", "mesh": "--mesh",
                           "scale": "--scale", "n_static": "--n-static", "trials": "--trial",
-                          "px_per_mm": "--px-per-mm", "workers": "--workers"}
+                          "px_per_mm": "--px-per-mm", "workers": "--workers", "plot": "--plot"}
 
 
 def slip_signal_command(
@@ -61,74 +60,56 @@ def slip_signal_command(
     before the labelled slip_onset_s, or on a no_slip trial) and the threshold scale that
     separates them best."""
 
-    def body() -> None:
-        from ..visuotactile.mesh import parse_mesh
-        from ..visuotactile.slip import slip_signal_file
+    from ..visuotactile.monitor_replay import parse_mesh
+    from ..visuotactile.slip import slip_signal_file
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        try:
-            cells = parse_mesh(mesh)
-        except ValueError as exc:
-            raise InputError(str(exc)) from None
-        if plot is not None:
-            from ..store.outdir import check_output_folder
-
-            check_output_folder(plot, merge=True)
+    def body():
         with RichProgress(enabled=progress) as bar:
-            result = slip_signal_file(file, source=source, run_dir=model, mesh=cells,
-                                      scale=scale, n_static=n_static, trials=trial,
-                                      px_per_mm=px_per_mm, workers=workers, progress=bar)
-        if plot is not None:
-            from ..store.outdir import output_folder
-            from ..visuotactile.plots import slip_signal_figure
+            return slip_signal_file(file, source=source, run_dir=model, mesh=parse_mesh(mesh),
+                                    scale=scale, n_static=n_static, trials=trial,
+                                    px_per_mm=px_per_mm, workers=workers, progress=bar,
+                                    plot=plot)
 
-            with output_folder(plot, merge=True) as tmp:
-                for r in result.trials:
-                    d = r.detection
-                    slip_signal_figure(
-                        d.t_s, d.signal, d.threshold, tmp / f"slip_{r.trial}_{r.source}.png",
-                        onset_s=r.onset_s, detected_s=d.first_time_s,
-                        first_judged_s=float(d.t_s[min(d.first_judged, d.t_s.size - 1)]),
-                        unit="mm" if r.source == "height" else "colour units",
-                        title=f"{r.trial} ({r.object or '-'}, {r.source}, mesh {mesh})")
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
-            return
-        from rich.console import Console
-        from rich.table import Table
+    result = run_guarded(body, flags=FLAGS)
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
+        return
+    _print(result, f"Slip signal of {file} (mesh {mesh}, threshold {scale:g} x mean of "
+           f"{n_static} static signals)")
+    if plot is not None:
+        typer.echo(f"wrote {plot}/slip_*.png")
 
-        console = Console(width=None if sys.stdout.isatty() else 160)
-        table = Table(title=f"Slip signal of {file} (mesh {mesh}, threshold {scale:g} x mean "
-                      f"of {n_static} static signals)")
-        for col in ("trial", "object", "source", "label", "onset (s)", "threshold",
-                    "detected at (s)", "peak/static", "result"):
-            table.add_column(col)
-        for r in result.trials:
-            d = r.detection
-            verdict = "-"
-            if r.score is not None:
-                verdict = ("false alarm" if r.score.false_alarm else
-                           "hit" if r.score.detected else
-                           "missed" if r.slip else "correct reject")
-                if r.score.false_alarm and r.score.detected:
-                    verdict = "hit + false alarm"
-            table.add_row(r.trial, r.object or "-", r.source,
-                          "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
-                          "-" if r.onset_s is None else f"{r.onset_s:.3f}",
-                          f"{d.threshold:.4g}",
-                          "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
-                          f"{d.peak_ratio():.1f}", verdict)
-        console.print(table)
-        for src, rates in result.rates.items():
-            best = result.best[src]
-            console.print(f"{src}: detection rate {rates.detection_rate:.2f} over "
-                          f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
-                          f"{rates.n_slip + rates.n_no_slip} trials; best scale "
-                          f"{best.scale:g} (as good: {best.best_from:g}-{best.best_to:g}; "
-                          f"detection {best.rates.detection_rate:.2f}, false alarms "
-                          f"{best.rates.false_alarms})")
-        if plot is not None:
-            console.print(f"wrote {plot}/slip_*.png")
 
-    run_guarded(body, flags=FLAGS)
+def _verdict(r) -> str:
+    if r.score is None:
+        return "-"
+    if r.score.false_alarm:
+        return "hit + false alarm" if r.score.detected else "false alarm"
+    return "hit" if r.score.detected else "missed" if r.slip else "correct reject"
+
+
+def _print(result, title: str) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console(width=None if sys.stdout.isatty() else 160)
+    table = Table(title=title)
+    for col in ("trial", "object", "source", "label", "onset (s)", "threshold",
+                "detected at (s)", "peak/static", "result"):
+        table.add_column(col)
+    for r in result.trials:
+        d = r.detection
+        table.add_row(r.trial, r.object or "-", r.source,
+                      "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
+                      "-" if r.onset_s is None else f"{r.onset_s:.3f}", f"{d.threshold:.4g}",
+                      "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
+                      f"{d.peak_ratio():.1f}", _verdict(r))
+    console.print(table)
+    for src, rates in result.rates.items():
+        best = result.best[src]
+        console.print(f"{src}: detection rate {rates.detection_rate:.2f} over "
+                      f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
+                      f"{rates.n_slip + rates.n_no_slip} trials; best scale {best.scale:g} "
+                      f"(as good: {best.best_from:g}-{best.best_to:g}; detection "
+                      f"{best.rates.detection_rate:.2f}, false alarms "
+                      f"{best.rates.false_alarms})")

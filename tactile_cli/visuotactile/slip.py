@@ -34,7 +34,15 @@ import numpy as np
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.trials import TactileFile, Trial
-from .heightmap import STREAM, HeightMapper, frames_px_per_mm, read_height_maps, trial_heights
+from ..threads import limit_threads
+from .heightmap import (
+    STREAM,
+    HeightMapper,
+    check_frame_times,
+    frames_px_per_mm,
+    read_height_maps,
+    trial_heights,
+)
 from .mesh import slip_signal
 from .normals import NormalModel, default_workers
 
@@ -320,8 +328,8 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                      n_static: int = DEFAULT_N_STATIC, trials: Sequence[str] | None = None,
                      px_per_mm: float | None = None, workers: int | None = None,
                      progress: Progress | None = None,
-                     keep_maps: dict[tuple[str, str], np.ndarray] | None = None
-                     ) -> SlipFileResult:
+                     keep_maps: dict[tuple[str, str], np.ndarray] | None = None,
+                     plot: str | os.PathLike[str] | None = None) -> SlipFileResult:
     """The slip signal (eq. 10) on ``mesh`` of every trial of ``path`` (an ingested
     frames file or a ``tactile heightmap`` file), its adaptive threshold (``scale`` x the
     mean of the first ``n_static`` signals) and slip decision; with trial labels, the
@@ -329,7 +337,11 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
 
     source: ``height`` (the file's height maps, or the frames through the normal model of
     ``run_dir``), ``intensity`` (colour change from the reference), ``both``, or ``auto``
-    (height when the file holds height maps or ``run_dir`` is given, else intensity)."""
+    (height when the file holds height maps or ``run_dir`` is given, else intensity).
+    ``workers``: threads of the maps (BLAS and OpenMP included; results do not depend on
+    it). ``plot``: a folder for one PNG per trial and source (S, threshold, onset and
+    detection), same-named files replaced; checked before any work."""
+    threads = _check_outputs(path, run_dir, plot, workers)
     if source not in SOURCES:
         raise InputError(f"`source` (={source!r}) must be one of {', '.join(SOURCES)}")
     if not (np.isfinite(scale) and scale > 0):
@@ -356,14 +368,15 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
             if first is None:
                 raise InputError("no trial holds frames or height maps", path=tf.path)
             mapper = HeightMapper(NormalModel.from_run(run_dir),
-                                  frames_px_per_mm(tf, first, px_per_mm),
-                                  workers=default_workers() if workers is None else workers)
+                                  frames_px_per_mm(tf, first, px_per_mm), workers=threads)
         prog.start(len(chosen) * len(sources), "slip signals")
         for t in chosen:
             slip, onset = trial_label(t.labels, path=tf.path, trial=t.name)
             obj = t.labels.get("object")
             for src in sources:
-                maps, t_s = trial_maps(t, src, mapper)
+                with limit_threads(threads):
+                    maps, t_s = trial_maps(t, src, mapper)
+                check_frame_times(t_s, t)
                 try:
                     sig = slip_signal(maps, mesh)
                     det = detect_slip(sig, t_s, n_static=n_static, scale=scale)
@@ -385,8 +398,43 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                                    [(bool(r.slip), r.onset_s) for r in labelled],
                                    n_static=n_static)
     cells = (int(mesh[0]), int(mesh[1]))
-    return SlipFileResult(str(path), cells, float(scale), int(n_static), out, rates, best,
-                          None if run_dir is None else str(run_dir))
+    result = SlipFileResult(str(path), cells, float(scale), int(n_static), out, rates, best,
+                            None if run_dir is None else str(run_dir))
+    if plot is not None:
+        _plot_signals(result, plot)
+    return result
+
+
+def _check_outputs(path: str | os.PathLike[str], run_dir: str | os.PathLike[str] | None,
+                   plot: str | os.PathLike[str] | None, workers: int | None) -> int:
+    """Before any work: the plot folder is no input and can be written; the thread count
+    (returned) is a whole number the machine can run."""
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder
+    from ..threads import check_threads
+
+    model = None if run_dir is None else os.path.join(run_dir, "model.pt")
+    check_outputs({"plot": plot}, [path, model])
+    if plot is not None:
+        check_output_folder(plot, merge=True)
+    return default_workers() if workers is None else check_threads(workers, "workers")
+
+
+def _plot_signals(result: SlipFileResult, plot: str | os.PathLike[str]) -> None:
+    """One PNG per trial and source in folder ``plot`` (Figs. 5, 7, 10, 11)."""
+    from ..store.outdir import output_folder
+    from .plots import slip_signal_figure
+
+    mesh = f"{result.mesh[0]}x{result.mesh[1]}"
+    with output_folder(plot, merge=True) as tmp:
+        for r in result.trials:
+            d = r.detection
+            slip_signal_figure(
+                d.t_s, d.signal, d.threshold, tmp / f"slip_{r.trial}_{r.source}.png",
+                onset_s=r.onset_s, detected_s=d.first_time_s,
+                first_judged_s=float(d.t_s[min(d.first_judged, d.t_s.size - 1)]),
+                unit="mm" if r.source == "height" else "colour units",
+                title=f"{r.trial} ({r.object or '-'}, {r.source}, mesh {mesh})")
 
 
 __all__ = ["DEFAULT_N_STATIC", "DEFAULT_SCALE", "SCALE_GRID", "SOURCES", "Rates", "ScaleChoice",
