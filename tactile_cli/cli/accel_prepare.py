@@ -46,45 +46,46 @@ def accel_prepare_command(
     80/10/10 split by segment), add the per-sample `speed_cm_s` target and optionally limit
     the bandwidth (paper 001, secs. 4 and 6.4)."""
 
-    def body() -> None:
-        from ..accel.prepare import prepare_file
+    from ..accel.prepare import prepare_file
 
+    def body():
         if (out is None) == (out_dir is None):
             raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
                              "input)")
         if out_dir is not None:
-            _prepare_each()
-            return
+            return _prepare_each(inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz,
+                                 overwrite=overwrite, scheduler=scheduler, workers=workers,
+                                 progress=progress, as_json=as_json)
         if len(inputs) > 1:
             raise InputError("--out takes one input; give --out-dir FOLDER for several",
                              path=inputs[1])
         if scheduler is not None or workers is not None:
             raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
-        src = inputs[0]
         with RichProgress(enabled=progress) as bar:
-            result = prepare_file(src, out, segment_s=segment_s, cutoff_hz=cutoff_hz,
-                                  overwrite=overwrite, progress=bar)
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-            return
-        typer.echo(f"wrote {result.out}: {result.n_segments} segments of {segment_s:g} s from "
-                   f"{result.n_recordings} recordings"
-                   + (f", band-limited to {cutoff_hz:g} Hz" if cutoff_hz else ""))
+            return prepare_file(inputs[0], out, segment_s=segment_s, cutoff_hz=cutoff_hz,
+                                overwrite=overwrite, progress=bar)
 
-    def _prepare_each() -> None:
-        from ..accel.prepare_each import prepare_each
+    result = run_guarded(body, flags=FLAGS)
+    if out_dir is not None:
+        return
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=2))
+        return
+    typer.echo(f"wrote {result.out}: {result.n_segments} segments of {segment_s:g} s from "
+               f"{result.n_recordings} recordings"
+               + (f", band-limited to {cutoff_hz:g} Hz" if cutoff_hz else ""))
 
-        def describe(item: Any) -> str:
-            return f"-> {item.output} ({item.value['n_segments']} segments)"
 
-        printer = FileBatchPrinter("accel-prepare", progress=progress, todo="to prepare",
-                                   describe=describe,
-                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
-        with printer.running():
-            result = prepare_each(inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz,
-                                  overwrite=overwrite, scheduler=scheduler, workers=workers,
-                                  on_plan=printer.on_plan, on_progress=printer.on_progress,
-                                  on_item=printer.on_item)
-        finish_batch(result, as_json=as_json)
+def _prepare_each(inputs: list[Path], out_dir: Path, *, progress: bool | None, as_json: bool,
+                  **settings: Any) -> None:
+    from ..accel.prepare_each import prepare_each
 
-    run_guarded(body, flags=FLAGS)
+    printer = FileBatchPrinter(
+        "accel-prepare", progress=progress, todo="to prepare",
+        describe=lambda item: f"-> {item.output} ({item.value['n_segments']} segments)",
+        flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+    with printer.running():
+        result = prepare_each(inputs, out_dir, on_plan=printer.on_plan,
+                              on_progress=printer.on_progress, on_item=printer.on_item,
+                              **settings)
+    finish_batch(result, as_json=as_json)
