@@ -66,6 +66,11 @@ class PrepareResult:
                 "n_segments": self.n_segments, "segment_s": self.segment_s,
                 "cutoff_hz": self.cutoff_hz, "sample_rate_hz": self.sample_rate_hz}
 
+    def summary_lines(self) -> list[str]:
+        return [f"wrote {self.out}: {self.n_segments} segments of {self.segment_s:g} s from "
+                f"{self.n_recordings} recordings"
+                + (f", band-limited to {self.cutoff_hz:g} Hz" if self.cutoff_hz else "")]
+
 
 def speed_cm_s(v_slip_m_s: np.ndarray, v_slide_m_s: np.ndarray) -> np.ndarray:
     """(n,) speed target in cm/s: ``100 x max(|v_slip|, |v_slide|)`` from (n,) m/s."""

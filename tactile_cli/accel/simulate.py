@@ -180,6 +180,11 @@ class VibroSceneResult:
                 "n_recordings": len(self.recordings), "duration_s": self.duration_s,
                 "elapsed_s": round(self.elapsed_s, 3), "recordings": list(self.recordings)}
 
+    def summary_lines(self) -> list[str]:
+        return [f"vibro-slip -> {self.out_dir} (seed {self.seed}): {len(self.recordings)} "
+                f"recordings, {self.duration_s:.1f} s in all, simulated in "
+                f"{self.elapsed_s:.1f} s"]
+
 
 def write_csv(path: Path, accel: np.ndarray, velocity: np.ndarray) -> None:
     """The 8-column CSV with a header: accelerations to 6 decimals, velocities to 5."""

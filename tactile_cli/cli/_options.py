@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Iterator
-from typing import Any
+from pathlib import Path
+from typing import Annotated, Any
 
 import typer
 
@@ -81,5 +82,16 @@ def usage_error(exc: Any) -> int:
     return exc.exit_code if exc.exit_code else EXIT_USAGE
 
 
-__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "NoArgsIsHelpError",
+#: Options several commands share, spelt once (the simulators, the chain commands).
+SceneConfigOption = Annotated[Path | None, typer.Option(
+    "--config", "-c", help="Scene config YAML (see configs/scene_<scene>.yaml); default: the "
+    "built-in defaults, which that file repeats.", metavar="CONFIG")]
+SeedOption = Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")]
+OverwriteOption = Annotated[bool, typer.Option(help="Replace an existing output (only once "
+                                               "the new one is complete).")]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON.")]
+
+
+__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "JsonOption",
+           "NoArgsIsHelpError", "OverwriteOption", "SceneConfigOption", "SeedOption",
            "finite_float_options", "usage_error"]

@@ -3,15 +3,16 @@ accel-tree recordings as training segments."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
 from ..errors import InputError
-from ._batch import BATCH_FLAGS, FileBatchPrinter, SchedulerOption, WorkersOption, finish_batch
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption, run_file_batch
+from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"segment_s": "--segment-s", "cutoff_hz": "--cutoff-hz",
@@ -39,7 +40,7 @@ def accel_prepare_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
                                             "--out-dir: prepare up-to-date inputs again).")
                          ] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Cut accelerometer recordings into segments (trials labelled `segment`, for the
@@ -47,15 +48,18 @@ def accel_prepare_command(
     the bandwidth (paper 001, secs. 4 and 6.4)."""
 
     from ..accel.prepare import prepare_file
+    from ..accel.prepare_each import prepare_each
 
     def body():
         if (out is None) == (out_dir is None):
             raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
                              "input)")
         if out_dir is not None:
-            return _prepare_each(inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz,
-                                 overwrite=overwrite, scheduler=scheduler, workers=workers,
-                                 progress=progress, as_json=as_json)
+            return run_file_batch("accel-prepare", lambda **printing: prepare_each(
+                inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz, overwrite=overwrite,
+                scheduler=scheduler, workers=workers, **printing), progress=progress,
+                as_json=as_json, flags=FLAGS, todo="to prepare",
+                describe=lambda item: f"-> {item.output} ({item.value['n_segments']} segments)")
         if len(inputs) > 1:
             raise InputError("--out takes one input; give --out-dir FOLDER for several",
                              path=inputs[1])
@@ -66,26 +70,5 @@ def accel_prepare_command(
                                 overwrite=overwrite, progress=bar)
 
     result = run_guarded(body, flags=FLAGS)
-    if out_dir is not None:
-        return
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
-        return
-    typer.echo(f"wrote {result.out}: {result.n_segments} segments of {segment_s:g} s from "
-               f"{result.n_recordings} recordings"
-               + (f", band-limited to {cutoff_hz:g} Hz" if cutoff_hz else ""))
-
-
-def _prepare_each(inputs: list[Path], out_dir: Path, *, progress: bool | None, as_json: bool,
-                  **settings: Any) -> None:
-    from ..accel.prepare_each import prepare_each
-
-    printer = FileBatchPrinter(
-        "accel-prepare", progress=progress, todo="to prepare",
-        describe=lambda item: f"-> {item.output} ({item.value['n_segments']} segments)",
-        flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
-    with printer.running():
-        result = prepare_each(inputs, out_dir, on_plan=printer.on_plan,
-                              on_progress=printer.on_progress, on_item=printer.on_item,
-                              **settings)
-    finish_batch(result, as_json=as_json)
+    if out_dir is None:
+        print_result(result, as_json=as_json)

@@ -12,6 +12,8 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 
 FLAGS: dict[str, Flag] = {"band_hz": "--band", "band_width_hz": "--band-width",
                           "plot": "--plot", "out": "--samples-out", "trial": "--trial",
@@ -75,7 +77,7 @@ def detect_contact_command(
                                                      metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing --plot/--samples-out "
                                             "files.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Detect gripper-object contacts (peak amplitude in a band, 2 x its noise level; the
     force at 1.6 x its noise) and touches on a grasped object (peak-frequency shift over
@@ -97,72 +99,13 @@ def detect_contact_command(
         result = run_guarded(lambda: vibro.follow_input(
             file, config=config, band_hz=_band(band), rate_hz=rate, scenario=scenario.value,
             follow_s=wait, on_event=say), flags=FLAGS)
-        _print_follow(result.as_dict(), as_json)
+        print_result(result, as_json=as_json, indent=None)
     elif samples_out is not None:
         one = trial[0] if trial and len(trial) == 1 else None
-        done = run_guarded(lambda: vibro.write_trial_samples(file, samples_out, trial=one,
-                                                              overwrite=overwrite), flags=FLAGS)
-        typer.echo(f"{done.trial}: {done.n_samples} samples at {done.sample_rate_hz:g} Hz -> "
-                   f"{done.out}")
+        print_result(run_guarded(lambda: vibro.write_trial_samples(
+            file, samples_out, trial=one, overwrite=overwrite), flags=FLAGS), as_json=as_json)
     else:
-        found = run_guarded(lambda: vibro.detect_contact_file(
+        print_result(run_guarded(lambda: vibro.detect_contact_file(
             file, config=config, band_hz=_band(band), trials=trial or None, plot=plot,
             propose_band=find_band_, band_width_hz=band_width, overwrite=overwrite),
-            flags=FLAGS)
-        if as_json:
-            typer.echo(json.dumps(found.as_dict(), indent=2))
-        else:
-            _print(found.as_dict())
-
-
-def _print_follow(out: dict, as_json: bool) -> None:
-    if as_json:
-        typer.echo(json.dumps(out))
-        return
-    lat = out["latency_ms"]
-    typer.echo(f"{out['n_samples']} samples, {out['n_updates']} updates, "
-               f"{len(out['events'])} {out['scenario']} events; per-update latency mean "
-               f"{lat['mean']:.3f} ms, p99 {lat['p99']:.3f} ms, max {lat['max']:.3f} ms "
-               f"(refresh every {out['refresh_ms']:g} ms; {out['over_budget']} over)")
-
-
-def _num(v: float | None, spec: str = ".3f") -> str:
-    return "-" if v is None else format(v, spec)
-
-
-def _print(out: dict) -> None:
-    from rich.console import Console
-    from rich.table import Table
-
-    tot = out["totals"]
-    console = Console(width=120)
-    rows = [r for r in out["trials"] if r["scenario"] == "contact"]
-    if rows:
-        table = Table(title=f"contact detection, band {out['config']['band_hz']} Hz")
-        for col in ("trial", "contact s", "vibration s", "force s", "lead s", "false alarms",
-                    "SNR vib", "SNR force"):
-            table.add_column(col, justify="right")
-        for r in rows:
-            table.add_row(r["trial"], _num(r.get("contact_s")), _num(r.get("vibration_s")),
-                          _num(r.get("force_s")), _num(r.get("lead_s")),
-                          str(r.get("vibration_false_alarms", "-")),
-                          _num(r.get("vibration_snr"), ".1f"), _num(r.get("force_snr"), ".1f"))
-        console.print(table)
-    if tot["n_contacts"]:
-        console.print(f"vibration detected {tot['vibration_detected']}/{tot['n_contacts']}, "
-                      f"force {tot['force_detected']}/{tot['n_contacts']}; false alarms "
-                      f"{tot['false_alarms']} (force {tot['force_false_alarms']}); SNR "
-                      f"{_num(tot['vibration_snr'], '.1f')} vs {_num(tot['force_snr'], '.1f')}"
-                      f"; vibration leads force by {_num(tot['mean_lead_s'], '.2f')} s on "
-                      "average")
-    if tot["n_touches"]:
-        console.print(f"touches: vibration {tot['vibration_touch_hits']}/{tot['n_touches']} "
-                      f"({tot['vibration_touch_false_alarms']} false), force "
-                      f"{tot['force_touch_hits']}/{tot['n_touches']} "
-                      f"({tot['force_touch_false_alarms']} false)")
-    if out.get("band"):
-        b = out["band"]
-        console.print(f"most contact-sensitive band: {b['band_hz'][0]:g}-{b['band_hz'][1]:g} Hz "
-                      f"(score {b['score']}, {b['n_recordings']} recordings)")
-    if out.get("plot"):
-        console.print(f"figure -> {out['plot']}")
+            flags=FLAGS), as_json=as_json)

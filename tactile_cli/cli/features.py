@@ -3,7 +3,6 @@ stream."""
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -11,8 +10,10 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import InputError
-from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption, run_file_batch
+from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir",
@@ -102,8 +103,7 @@ def spectral_command(
         "--nperseg", min=8, help="With --stream: Welch segment (samples; at most the "
         "window), overlap half.")] = 64,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
-                       ] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Power ratio Gamma and single- and multi-finger group square coherence G2 (paper 004)
@@ -112,7 +112,7 @@ def spectral_command(
     world), for tactile train CONFIG --data OUT. With --stream NAME: the same features of
     any multichannel stream (accelerometers, vibration fingers, taxels of any layout), one
     array or several (--group), the stream's per-sample labels taken at each window's end."""
-    from ..spectral.stream_features import write_stream_features
+    from ..spectral.stream_features import stream_features_each, write_stream_features
     from ..taxel import write_taxel_features
 
     def settings() -> dict[str, Any]:
@@ -125,8 +125,10 @@ def spectral_command(
                                                    "groups": group, "bands": band,
                                                    "config": config})
         if out_dir is not None:
-            return _each(files, out_dir, settings(), overwrite, scheduler, workers, progress,
-                         as_json)
+            return run_file_batch("features", lambda **printing: stream_features_each(
+                files, out_dir, settings=settings(), overwrite=overwrite, scheduler=scheduler,
+                workers=workers, **printing), progress=progress, as_json=as_json, flags=FLAGS,
+                describe=lambda item: f"-> {item.output} ({item.value['n_windows']} windows)")
         with RichProgress(enabled=progress) as bar:
             if stream is None:
                 return write_taxel_features(files[0], out, config=config, overwrite=overwrite,
@@ -135,43 +137,8 @@ def spectral_command(
                                          overwrite=overwrite, progress=bar, **settings())
 
     result = run_guarded(body, flags=FLAGS)
-    if out_dir is not None:
-        return
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
-        return
-    _print(result, stream)
-
-
-def _print(result: Any, stream: str | None) -> None:
-    line = (f"wrote {result.out}: {result.n_trials} trial(s), {result.n_windows} windows of "
-            f"{result.window_s:g} s every {result.hop_s:g} s, {len(result.channels)} channels")
-    if stream is None:
-        flagged = [p for p, bad in result.rank_deficient.items() if bad]
-        typer.echo(line + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
-                           if flagged else ""))
-        return
-    typer.echo(f"{line} from {len(result.groups)} array(s) of {stream}"
-               + (f"; rank-deficient bands (G2 biased up): {', '.join(result.rank_deficient)}"
-                  if result.rank_deficient else ""))
-    if result.too_short:
+    if out_dir is None:
+        print_result(result, as_json=as_json)
+    if out_dir is None and stream is not None and result.too_short:
         print(f"tactile: note: left out, shorter than one window: "
               f"{', '.join(result.too_short)}", file=sys.stderr)
-
-
-def _each(files: list[Path], folder: Path, settings: dict[str, Any], overwrite: bool,
-          scheduler: str | None, workers: int | None, progress: bool | None,
-          as_json: bool) -> None:
-    from ..spectral.stream_features import stream_features_each
-    from ._batch import FileBatchPrinter, finish_batch
-
-    printer = FileBatchPrinter(
-        "features", progress=progress, todo="to do",
-        describe=lambda item: f"-> {item.output} ({item.value['n_windows']} windows)",
-        flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
-    with printer.running():
-        result = stream_features_each(files, folder, settings=settings, overwrite=overwrite,
-                                      scheduler=scheduler, workers=workers,
-                                      on_plan=printer.on_plan, on_progress=printer.on_progress,
-                                      on_item=printer.on_item)
-    finish_batch(result, as_json=as_json)

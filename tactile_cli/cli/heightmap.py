@@ -3,13 +3,14 @@ sec. II-B, eq. 9 and the Poisson integration; Fig. 2)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"run_dir": "--model", "out": "--out", "truth_dir": "--truth",
@@ -49,7 +50,7 @@ def heightmap_command(
         "--plot", help="Folder for one Fig. 2-style PNG per trial (the frame of largest "
         "height: image and 3-D height map).", metavar="FOLDER", show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Height maps (mm) of every frame: the MLP's surface normals per pixel, gradients by
@@ -64,15 +65,4 @@ def heightmap_command(
                                   skip_below=skip_below, workers=workers, trials=trial,
                                   overwrite=overwrite, progress=bar, plot=plot)
 
-    result = run_guarded(body, flags=FLAGS)
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
-        return
-    typer.echo(f"wrote {out}: {sum(t.n_frames for t in result.trials)} height maps of "
-               f"{len(result.trials)} trial(s), {result.ms_per_frame:.1f} ms per frame "
-               f"(reading and writing included), px_per_mm {result.px_per_mm:g}")
-    if result.rmse_mm is not None:
-        typer.echo(f"height RMSE vs truth: {result.rmse_mm:.4f} mm over all pixels, "
-                   f"{result.rmse_contact_mm:.4f} mm over contact pixels")
-    if result.plot is not None:
-        typer.echo(f"wrote {result.plot}/height_*.png")
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "model_run": "--model", "mesh": "--mesh",
@@ -61,7 +62,7 @@ def monitor_command(
     overwrite: Annotated[bool, typer.Option(
         help="Empty the --plot folder first (default: add the PNGs to it, replacing "
         "same-named ones).")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Replay each trial's frames through the monitor: slip signal on the tactile mesh,
@@ -82,31 +83,4 @@ def monitor_command(
                                  threshold=threshold, n_static=n_static, trials=trial,
                                  progress=bar)
 
-    result = run_guarded(body, flags=FLAGS)
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2))
-        return
-    for t in result.trials:
-        typer.echo(f"{t.trial}: threshold {t.threshold:.6g} (monitor from frame "
-                   f"{t.start_frame}; gripper motion from {t.motion_from})")
-        for e in t.events:
-            if e.kind in ("slip", "no_slip", "raise_grip", "release_grip"):
-                typer.echo(f"  {e.t_s:8.3f} s  frame {e.frame:5d}  {e.kind:<12} {e.detail}")
-        ignored = sum(1 for e in t.events if e.kind == "ignored_moving")
-        restarts = sum(1 for e in t.events if e.kind == "timer_restart")
-        line = f"  {restarts} timer restarts, {ignored} frames above threshold ignored " \
-               "while the gripper moved"
-        if t.score is not None:
-            s = t.score
-            delay = (f", mean delay {1e3 * sum(s.delays_s) / len(s.delays_s):.0f} ms"
-                     if s.delays_s else "")
-            line += (f"; truth: {s.caught}/{s.n_interferences} caught, {s.missed} "
-                     f"missed, {s.false_slips} false slips{delay}")
-        typer.echo(line)
-    tot = result.totals()
-    if tot["trials_scored"]:
-        rate = tot["detection_rate"]
-        typer.echo(f"all: {tot['caught']}/{tot['interferences']} interferences caught"
-                   + (f" ({100 * rate:.0f} %)" if rate is not None else "")
-                   + f", {tot['false_slips']} false slips, {tot['raise_grip']} raise and "
-                   f"{tot['release_grip']} release commands")
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

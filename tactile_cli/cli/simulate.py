@@ -11,6 +11,9 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption, OverwriteOption, SeedOption
+from ._options import SceneConfigOption as ConfigOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 #: How these commands spell the library arguments their errors name (each adds its own).
@@ -24,26 +27,18 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-ConfigOption = Annotated[Path | None, typer.Option(
-    "--config", "-c", help="Scene config YAML (see configs/scene_<scene>.yaml); default: the "
-    "built-in defaults, which that file repeats.", metavar="CONFIG")]
-SeedOption = Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")]
-OverwriteOption = Annotated[bool, typer.Option(help="Replace an existing output.")]
-JsonOption = Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")]
-
-
 def run_scene(simulate: Callable[[Any], Any], *, as_json: bool, progress: bool | None,
-              line: Callable[[Any, dict[str, Any]], str], flags: dict[str, Flag]) -> Any:
-    """Run ``simulate(progress_bar)`` guarded and print its summary (JSON, or ``line``)."""
+              flags: dict[str, Flag]) -> Any:
+    """Run ``simulate(progress_bar)`` guarded; print its result (JSON, or its summary)."""
 
     def body() -> Any:
         with RichProgress(enabled=progress) as bar:
             return simulate(bar)
 
     result = run_guarded(body, flags={**FLAGS, **flags})
-    summary = result.as_dict()
-    typer.echo(json.dumps(summary, indent=2) if as_json else line(result, summary))
-    return summary
+    if hasattr(result, "summary_lines"):
+        print_result(result, as_json=as_json)
+    return result
 
 
 def _parse_levels(text: str | None) -> list[int] | None:
@@ -93,11 +88,13 @@ def marker_events_command(
             cfg = cfg.with_overrides(groups=groups, levels=_parse_levels(levels))
         return simulate_marker_events(cfg, out, seed=seed, progress=bar, overwrite=overwrite)
 
-    run_scene(simulate, as_json=as_json, progress=progress, flags={"groups": "--groups"},
-              line=lambda r, s: f"marker events -> {r.out_dir} (seed {r.seed}): "
-              f"{s['n_trials']} trials, {s['n_events']:,} events ({s['n_positive']:,} "
-              f"positive, {s['n_negative']:,} negative), {s['duration_s']:.2f} trial "
-              f"seconds, simulated in {s['elapsed_s']:.2f} s")
+    r = run_scene(simulate, as_json=as_json, progress=progress, flags={"groups": "--groups"})
+    s = r.as_dict()
+    typer.echo(json.dumps(s, indent=2) if as_json else
+               f"marker events -> {r.out_dir} (seed {r.seed}): {s['n_trials']} trials, "
+               f"{s['n_events']:,} events ({s['n_positive']:,} positive, {s['n_negative']:,} "
+               f"negative), {s['duration_s']:.2f} trial seconds, simulated in "
+               f"{s['elapsed_s']:.2f} s")
 
 
 @app.command("vibro-slip")
@@ -129,10 +126,7 @@ def vibro_slip_command(
         return simulate_vibro_slip(cfg.with_duration(duration), out, seed=seed, progress=bar,
                                    overwrite=overwrite)
 
-    run_scene(simulate, as_json=as_json, progress=progress, flags={"duration_s": "--duration"},
-              line=lambda r, s: f"vibro-slip -> {r.out_dir} (seed {r.seed}): "
-              f"{s['n_recordings']} recordings, {s['duration_s']:.1f} s in all, simulated in "
-              f"{s['elapsed_s']:.1f} s")
+    run_scene(simulate, as_json=as_json, progress=progress, flags={"duration_s": "--duration"})
 
 
 @app.command("vibrotouch")
@@ -168,13 +162,7 @@ def vibrotouch_command(
         return simulate_vibrotouch(cfg, out, seed=seed, progress=bar, overwrite=overwrite,
                                    sources=[config] if config is not None else ())
 
-    def line(r: Any, s: dict[str, Any]) -> str:
-        scen = [t["scenario"] for t in s["trials"]]
-        return (f"vibrotouch -> {r.out} (seed {r.seed}): {scen.count('contact')} contact and "
-                f"{scen.count('touch')} touch trials, {s['duration_s']:.1f} s in all, "
-                f"simulated in {s['elapsed_s']:.1f} s")
-
-    run_scene(simulate, as_json=as_json, progress=progress, line=line,
+    run_scene(simulate, as_json=as_json, progress=progress,
               flags={"contact_trials": "--contact-trials", "touch_trials": "--touch-trials"})
 
 
@@ -212,9 +200,5 @@ def taxel_slip_command(
         return simulate_taxel_slip(cfg, out, seed=seed, progress=bar, overwrite=overwrite)
 
     run_scene(simulate, as_json=as_json, progress=progress,
-              flags={"presets": "--preset", "trials_per_class": "--trials"},
-              line=lambda r, s: f"taxel-slip -> {r.out} (seed {r.seed}): {s['n_trials']} "
-              "trials (" + ", ".join(f"{p} {c['hand']}+{c['world']}"
-                                     for p, c in r.counts.items())
-              + f" hand+world), simulated in {s['elapsed_s']:.1f} s")
+              flags={"presets": "--preset", "trials_per_class": "--trials"})
 

@@ -1,9 +1,8 @@
 """`tactile simulate digit-press OUT`: the DIGIT-like scene of paper 002 (registered in
-``cli/simulate.py``)."""
+``cli/__init__.py``)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -11,6 +10,8 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption, OverwriteOption, SceneConfigOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite",
@@ -27,12 +28,7 @@ def digit_press_command(
         Path | None, typer.Option("--out", "-o", help="Output folder (same as OUT).",
                                   metavar="FOLDER", show_default=False)
     ] = None,
-    config: Annotated[
-        Path | None,
-        typer.Option("--config", "-c", help="Scene config YAML; default: the built-in "
-                     "defaults, which configs/scene_digit_press.yaml repeats.",
-                     metavar="CONFIG"),
-    ] = None,
+    config: SceneConfigOption = None,
     seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte "
                                       "and this unit's lighting.")] = 0,
     calibration_presses: Annotated[
@@ -49,10 +45,8 @@ def digit_press_command(
                                  "(cable, box, fabric, hex_key_small, hex_key_medium, "
                                  "hex_key_large).", metavar="NAMES")
     ] = None,
-    overwrite: Annotated[
-        bool, typer.Option(help="Replace an existing non-empty output folder.")
-    ] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    overwrite: OverwriteOption = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 002's DIGIT: ball-bearing calibration presses and objects (cable, box
@@ -85,13 +79,4 @@ def digit_press_command(
             return simulate_digit_press(cfg, out_arg or out, seed=seed, progress=bar,
                                         overwrite=overwrite)
 
-    summary = run_guarded(body, flags=FLAGS).as_dict()
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    typer.echo(f"digit-press -> {summary['out_dir']} (seed {summary['seed']}): "
-               f"{summary['n_calibration_presses']} calibration presses, "
-               f"{summary['n_trials']} trials ({summary['n_slip']} slipping), "
-               f"{summary['n_frames']} frames, simulated in {summary['elapsed_s']:.1f} s")
-    for line in summary["ingest"]:
-        typer.echo(f"  then: {line}")
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

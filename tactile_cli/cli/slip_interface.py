@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"folds": "--folds", "out": "--out", "plot": "--plot",
@@ -32,7 +33,7 @@ def slip_interface_command(
                                               "as a PNG (like Fig. 12).", metavar="FILE")
                     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Classify the slip interface (object/hand or object/world) of every trial with a
@@ -48,24 +49,4 @@ def slip_interface_command(
             return slip_interface_file(file, config=config, folds=folds, out=out, plot=plot,
                                        overwrite=overwrite, progress=bar)
 
-    result = run_guarded(body, flags=FLAGS)
-    summary = result.as_dict()
-    if as_json:
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    from rich.console import Console
-    from rich.table import Table
-
-    table = Table(title=f"slip interface, {result.folds}-fold CV per trial "
-                  f"({', '.join(result.datasets)})")
-    for col in ("preset", "feature", "trials", "decided", "full spectrum",
-                "best band (nested)", "best band (optimistic)", "(f, w) Hz"):
-        table.add_column(col, justify="right")
-    for s in result.scores:
-        f, w = s.optimistic_band_hz
-        table.add_row(s.preset, s.feature, str(s.n_trials), str(s.n_decided),
-                      f"{100 * s.full_spectrum:.1f} %", f"{100 * s.nested_best_band:.1f} %",
-                      f"{100 * s.optimistic_best_band:.1f} %", f"({f:.4g}, {w:.4g})")
-    Console(width=130).print(table)
-    typer.echo(f"nested best band >= 85 %: {summary['nested_at_least_85']} of "
-               f"{summary['n_combinations']} preset x feature combinations")
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json, width=130)

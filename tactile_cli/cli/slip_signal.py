@@ -3,7 +3,6 @@ threshold and the slip decision per trial (paper 002, secs. III-V; Figs. 5, 7, 1
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -11,6 +10,8 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "run_dir": "--model", "mesh": "--mesh",
@@ -50,8 +51,7 @@ def slip_signal_command(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Folder for one PNG per trial and source: S over time with the "
         "threshold, onset and detection.", metavar="FOLDER", show_default=False)] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON (per "
-                                          "trial the signal too).")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Slip signal S = sum |h_t - h_(t-1)| over a tactile mesh (eq. 10), adaptive threshold
@@ -70,46 +70,5 @@ def slip_signal_command(
                                     px_per_mm=px_per_mm, workers=workers, progress=bar,
                                     plot=plot)
 
-    result = run_guarded(body, flags=FLAGS)
-    if as_json:
-        typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
-        return
-    _print(result, f"Slip signal of {file} (mesh {mesh}, threshold {scale:g} x mean of "
-           f"{n_static} static signals)")
-    if plot is not None:
-        typer.echo(f"wrote {plot}/slip_*.png")
-
-
-def _verdict(r) -> str:
-    if r.score is None:
-        return "-"
-    if r.score.false_alarm:
-        return "hit + false alarm" if r.score.detected else "false alarm"
-    return "hit" if r.score.detected else "missed" if r.slip else "correct reject"
-
-
-def _print(result, title: str) -> None:
-    from rich.console import Console
-    from rich.table import Table
-
-    console = Console(width=None if sys.stdout.isatty() else 160)
-    table = Table(title=title)
-    for col in ("trial", "object", "source", "label", "onset (s)", "threshold",
-                "detected at (s)", "peak/static", "result"):
-        table.add_column(col)
-    for r in result.trials:
-        d = r.detection
-        table.add_row(r.trial, r.object or "-", r.source,
-                      "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
-                      "-" if r.onset_s is None else f"{r.onset_s:.3f}", f"{d.threshold:.4g}",
-                      "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
-                      f"{d.peak_ratio():.1f}", _verdict(r))
-    console.print(table)
-    for src, rates in result.rates.items():
-        best = result.best[src]
-        console.print(f"{src}: detection rate {rates.detection_rate:.2f} over "
-                      f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
-                      f"{rates.n_slip + rates.n_no_slip} trials; best scale {best.scale:g} "
-                      f"(as good: {best.best_from:g}-{best.best_to:g}; detection "
-                      f"{best.rates.detection_rate:.2f}, false alarms "
-                      f"{best.rates.false_alarms})")
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json,
+                 width=None if sys.stdout.isatty() else 160)

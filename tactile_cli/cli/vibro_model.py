@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 
 FLAGS: dict[str, Flag] = {"plot": "--plot"}
 
@@ -21,7 +22,7 @@ def vibro_model_command(
                                               "(like paper 003, Fig. 3A).", metavar="FILE")
                     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --plot file.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Solve the lumped model of paper 003 (sec. 2.2) from 1 to 1000 Hz: the
     accelerometer's displacement per unit motor displacement without contact and with the
@@ -33,20 +34,5 @@ def vibro_model_command(
     """
     from ..vibro.pipeline import model_file
 
-    result = run_guarded(lambda: model_file(config, plot=plot, overwrite=overwrite),
-                         flags=FLAGS)
-    out, cfg = result.as_dict(), result.config
-    if as_json:
-        typer.echo(json.dumps(out, indent=2))
-        return
-    typer.echo(f"lumped model {config}: {len(cfg.blocks)} blocks, {len(cfg.contact)} contact "
-               f"links; |x_{cfg.sensor} / u_{cfg.source}| over {cfg.f_min_hz:g}-"
-               f"{cfg.f_max_hz:g} Hz")
-    for key, title in (("resonances_free", "no contact"), ("resonances_contact", "contact")):
-        peaks = ", ".join(f"{r['f_hz']:.1f} Hz ({r['amplitude']:.3g})" for r in out[key])
-        typer.echo(f"  {title:>10}: {peaks or 'no resonance'}")
-    for key, title in (("natural_free_hz", "no contact"), ("natural_contact_hz", "   contact")):
-        typer.echo(f"  natural frequencies (Hz), {title}: "
-                   + ", ".join(f"{v:.1f}" for v in out[key]))
-    if result.plot is not None:
-        typer.echo(f"  spectra -> {result.plot}")
+    print_result(run_guarded(lambda: model_file(config, plot=plot, overwrite=overwrite),
+                             flags=FLAGS), as_json=as_json)

@@ -71,6 +71,13 @@ class StreamFeaturesResult:
                 "rank_deficient_bands": list(self.rank_deficient),
                 "too_short": list(self.too_short)}
 
+    def summary_lines(self) -> list[str]:
+        return [f"wrote {self.out}: {self.n_trials} trial(s), {self.n_windows} windows of "
+                f"{self.window_s:g} s every {self.hop_s:g} s, {len(self.channels)} channels "
+                f"from {len(self.groups)} array(s) of {self.stream}"
+                + (f"; rank-deficient bands (G2 biased up): {', '.join(self.rank_deficient)}"
+                   if self.rank_deficient else "")]
+
 
 def channel_groups(names: Sequence[str], groups: Sequence[Sequence[str]] | None
                    ) -> list[list[int]]:

@@ -343,6 +343,23 @@ class SlipInterfaceResult:
                 "nested_at_least_85": sum(a >= 0.85 for a in nested),
                 "n_combinations": len(nested), "elapsed_s": round(self.elapsed_s, 3)}
 
+    def table(self) -> tuple[str, list[str], list[list[str]]]:
+        """Title, columns and one row per preset and feature (accuracies in %)."""
+        cols = ["preset", "feature", "trials", "decided", "full spectrum",
+                "best band (nested)", "best band (optimistic)", "(f, w) Hz"]
+        rows = [[s.preset, s.feature, str(s.n_trials), str(s.n_decided),
+                 f"{100 * s.full_spectrum:.1f} %", f"{100 * s.nested_best_band:.1f} %",
+                 f"{100 * s.optimistic_best_band:.1f} %",
+                 f"({s.optimistic_band_hz[0]:.4g}, {s.optimistic_band_hz[1]:.4g})"]
+                for s in self.scores]
+        return (f"slip interface, {self.folds}-fold CV per trial ({', '.join(self.datasets)})",
+                cols, rows)
+
+    def summary_lines(self) -> list[str]:
+        nested = [s.nested_best_band for s in self.scores]
+        return [f"nested best band >= 85 %: {sum(a >= 0.85 for a in nested)} of "
+                f"{len(nested)} preset x feature combinations"]
+
 
 def slip_interface(path: str | Path, fcfg: FeatureConfig, *,
                    progress: Progress | None = None) -> SlipInterfaceResult:
@@ -443,6 +460,13 @@ class FeatureStreamResult:
                 "stream": FEATURE_STREAM, "channels": list(self.channels),
                 "window_s": self.window_s, "hop_s": self.hop_s,
                 "rank_deficient": self.rank_deficient}
+
+    def summary_lines(self) -> list[str]:
+        flagged = [p for p, bad in self.rank_deficient.items() if bad]
+        return [f"wrote {self.out}: {self.n_trials} trial(s), {self.n_windows} windows of "
+                f"{self.window_s:g} s every {self.hop_s:g} s, {len(self.channels)} channels"
+                + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
+                   if flagged else "")]
 
 
 def write_taxel_features(path: str | Path, out: str | Path, fcfg: FeatureConfig | None = None,

@@ -210,6 +210,12 @@ class TaxelSlipResult:
                 "n_trials": sum(sum(c.values()) for c in self.counts.values()),
                 "duration_s": round(self.duration_s, 3), "elapsed_s": round(self.elapsed_s, 3)}
 
+    def summary_lines(self) -> list[str]:
+        counts = ", ".join(f"{p} {c['hand']}+{c['world']}" for p, c in self.counts.items())
+        return [f"taxel-slip -> {self.out} (seed {self.seed}): "
+                f"{sum(sum(c.values()) for c in self.counts.values())} trials ({counts} "
+                f"hand+world), simulated in {self.elapsed_s:.1f} s"]
+
 
 def simulate_taxel_slip(cfg: TaxelSceneConfig, out: str | Path, *, seed: int,
                         progress: Progress | None = None, overwrite: bool = False,

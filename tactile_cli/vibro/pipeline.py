@@ -308,6 +308,19 @@ class ModelFileResult:
         return {**self.spectra.as_dict(), "config": str(self.config_path),
                 "plot": None if self.plot is None else str(self.plot)}
 
+    def summary_lines(self) -> list[str]:
+        cfg, out = self.config, self.as_dict()
+        lines = [f"lumped model {self.config_path}: {len(cfg.blocks)} blocks, "
+                 f"{len(cfg.contact)} contact links; |x_{cfg.sensor} / u_{cfg.source}| over "
+                 f"{cfg.f_min_hz:g}-{cfg.f_max_hz:g} Hz"]
+        for key, title in (("resonances_free", "no contact"), ("resonances_contact", "contact")):
+            peaks = ", ".join(f"{r['f_hz']:.1f} Hz ({r['amplitude']:.3g})" for r in out[key])
+            lines.append(f"  {title:>10}: {peaks or 'no resonance'}")
+        for key, title in (("natural_free_hz", "no contact"), ("natural_contact_hz", "contact")):
+            lines.append(f"  natural frequencies (Hz), {title:>10}: "
+                         + ", ".join(f"{v:.1f}" for v in out[key]))
+        return lines + ([f"  spectra -> {self.plot}"] if self.plot is not None else [])
+
 
 def model_file(config: str | Path, *, plot: str | Path | None = None,
                overwrite: bool = False) -> ModelFileResult:
@@ -341,6 +354,44 @@ class ContactFileResult:
         return {**self.report.as_dict(),
                 "band": None if self.band is None else self.band.as_dict(),
                 "plot": None if self.plot is None else str(self.plot)}
+
+    def table(self) -> tuple[str, list[str], list[list[str]]] | None:
+        """Title, columns and rows of the contact trials (None without one)."""
+        rows = [r for r in self.as_dict()["trials"] if r["scenario"] == "contact"]
+        if not rows:
+            return None
+        cols = ["trial", "contact s", "vibration s", "force s", "lead s", "false alarms",
+                "SNR vib", "SNR force"]
+        return (f"contact detection, band {self.report.config['band_hz']} Hz", cols,
+                [[r["trial"], _text(r.get("contact_s")), _text(r.get("vibration_s")),
+                  _text(r.get("force_s")), _text(r.get("lead_s")),
+                  str(r.get("vibration_false_alarms", "-")), _text(r.get("vibration_snr"), ".1f"),
+                  _text(r.get("force_snr"), ".1f")] for r in rows])
+
+    def summary_lines(self) -> list[str]:
+        tot, lines = self.report.totals(), []
+        if tot["n_contacts"]:
+            lines.append(f"vibration detected {tot['vibration_detected']}/{tot['n_contacts']}, "
+                         f"force {tot['force_detected']}/{tot['n_contacts']}; false alarms "
+                         f"{tot['false_alarms']} (force {tot['force_false_alarms']}); SNR "
+                         f"{_text(tot['vibration_snr'], '.1f')} vs "
+                         f"{_text(tot['force_snr'], '.1f')}; vibration leads force by "
+                         f"{_text(tot['mean_lead_s'], '.2f')} s on average")
+        if tot["n_touches"]:
+            lines.append(f"touches: vibration {tot['vibration_touch_hits']}/{tot['n_touches']} "
+                         f"({tot['vibration_touch_false_alarms']} false), force "
+                         f"{tot['force_touch_hits']}/{tot['n_touches']} "
+                         f"({tot['force_touch_false_alarms']} false)")
+        if self.band is not None:
+            b = self.band.as_dict()
+            lines.append(f"most contact-sensitive band: {b['band_hz'][0]:g}-"
+                         f"{b['band_hz'][1]:g} Hz (score {b['score']}, {b['n_recordings']} "
+                         "recordings)")
+        return lines + ([f"figure -> {self.plot}"] if self.plot is not None else [])
+
+
+def _text(v: float | None, spec: str = ".3f") -> str:
+    return "-" if v is None else format(v, spec)
 
 
 def detect_contact_file(path: str | Path, *, config: str | Path | None = None,
@@ -381,6 +432,10 @@ class SamplesResult:
     def as_dict(self) -> dict[str, Any]:
         return {"trial": self.trial, "n_samples": self.n_samples,
                 "sample_rate_hz": self.sample_rate_hz, "out": str(self.out)}
+
+    def summary_lines(self) -> list[str]:
+        return [f"{self.trial}: {self.n_samples} samples at {self.sample_rate_hz:g} Hz -> "
+                f"{self.out}"]
 
 
 def write_trial_samples(path: str | Path, out: str | Path, *, trial: str | None,

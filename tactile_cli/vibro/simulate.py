@@ -239,6 +239,12 @@ class VibroTouchResult:
                 "duration_s": round(self.duration_s, 3), "elapsed_s": round(self.elapsed_s, 3),
                 "trials": list(self.trials)}
 
+    def summary_lines(self) -> list[str]:
+        scen = [t["scenario"] for t in self.trials]
+        return [f"vibrotouch -> {self.out} (seed {self.seed}): {scen.count('contact')} contact "
+                f"and {scen.count('touch')} touch trials, {self.duration_s:.1f} s in all, "
+                f"simulated in {self.elapsed_s:.1f} s"]
+
 
 def simulate_vibrotouch(cfg: VibroTouchSceneConfig, out: str | Path, *, seed: int,
                         progress: Progress | None = None, overwrite: bool = False,

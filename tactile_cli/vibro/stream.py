@@ -121,6 +121,14 @@ class FollowResult:
                 "refresh_ms": round(self.refresh_ms, 3),
                 "over_budget": int(np.sum(lat > self.refresh_ms)) if self.latencies_ms else 0}
 
+    def summary_lines(self) -> list[str]:
+        out = self.as_dict()
+        lat = out["latency_ms"]
+        return [f"{self.n_samples} samples, {self.n_updates} updates, {len(self.events)} "
+                f"{self.scenario} events; per-update latency mean {lat['mean']:.3f} ms, p99 "
+                f"{lat['p99']:.3f} ms, max {lat['max']:.3f} ms (refresh every "
+                f"{out['refresh_ms']:g} ms; {out['over_budget']} over)"]
+
 
 class ContactStream:
     """The detector of one scenario fed chunk by chunk; :meth:`push` returns the events

@@ -236,6 +236,13 @@ class AvoidanceResult:
                                       if e.kind == "release_grip"),
                 "elapsed_s": self.elapsed_s, "trials": [t.as_dict() for t in self.trials]}
 
+    def summary_lines(self) -> list[str]:
+        s = self.as_dict()
+        return [f"digit-avoidance -> {self.out_dir} (seed {self.seed}): {s['n_trials']} trials, "
+                f"{s['n_frames']} frames, {s['n_interferences']} interferences; live monitor: "
+                f"{s['n_raise_grip']} raise and {s['n_release_grip']} release commands; "
+                f"simulated in {self.elapsed_s:.1f} s"]
+
 
 def _simulate_trial(name: str, obj: str, cfg: AvoidanceConfig, optics: Any,
                     rng: np.random.Generator, folder: Path, progress: Progress

@@ -271,6 +271,31 @@ class NormalLabelsResult:
                 "elapsed_s": round(self.elapsed_s, 3),
                 "presses": [p.row() for p in self.presses]}
 
+    def summary_lines(self) -> list[str]:
+        """Per press its circle (or why none), the table written and the circle error."""
+        s = self.as_dict()
+        lines = []
+        for row in s["presses"]:
+            if row["status"] != "ok":
+                lines.append(f"{row['trial']}: not labelled: {row['status']}")
+                continue
+            err = ("" if row["centre_error_px"] is None else
+                   f"  error: centre {row['centre_error_px']:.2f} px, radius "
+                   f"{row['radius_error_px']:+.2f} px")
+            lines.append(f"{row['trial']}: circle ({row['centre_x_px']:.1f}, "
+                         f"{row['centre_y_px']:.1f}) r {row['radius_px']:.1f} px, "
+                         f"{row['n_contact']} contact + {row['n_flat']} flat px{err}")
+        lines.append(f"wrote {s['out']}: {s['n_pixels']:,} pixels from {s['n_labelled']} of "
+                     f"{s['n_presses']} presses ({s['n_contact_pixels']:,} in contact; "
+                     f"{s['n_flat_left_out']:,} flat pixels left out, at most "
+                     f"{s['flat_per_press']} per press); px_per_mm {s['px_per_mm']:g}")
+        for key in ("centre_error_px", "radius_error_px"):
+            if s[key] is not None:
+                lines.append(f"circle {key.replace('_px', '').replace('_', ' ')} against the "
+                             f"scene truth: median {s[key]['median']:.2f} px, max "
+                             f"{s[key]['max']:.2f} px (n={s[key]['n']})")
+        return lines
+
 
 def _stats(values: Sequence[float]) -> dict[str, float | int] | None:
     if not values:

@@ -208,6 +208,15 @@ class HeightmapResult:
                 "ms_per_frame": self.ms_per_frame,
                 "trials": [t.__dict__ for t in self.trials]}
 
+    def summary_lines(self) -> list[str]:
+        lines = [f"wrote {self.out}: {sum(t.n_frames for t in self.trials)} height maps of "
+                 f"{len(self.trials)} trial(s), {self.ms_per_frame:.1f} ms per frame (reading "
+                 f"and writing included), px_per_mm {self.px_per_mm:g}"]
+        if self.rmse_mm is not None:
+            lines.append(f"height RMSE vs truth: {self.rmse_mm:.4f} mm over all pixels, "
+                         f"{self.rmse_contact_mm:.4f} mm over contact pixels")
+        return lines + ([f"wrote {self.plot}/height_*.png"] if self.plot is not None else [])
+
 
 def _rmse(sq: float, n: int) -> float | None:
     return float(np.sqrt(sq / n)) if n else None

@@ -118,6 +118,35 @@ class MonitorFileResult:
                 "hold_s": self.hold_s, "motion_s": self.motion_s, "totals": self.totals(),
                 "trials": [t.as_dict() for t in self.trials]}
 
+    def summary_lines(self) -> list[str]:
+        """Per trial its threshold, mode changes, grip commands and score; the totals."""
+        lines = []
+        for t in self.trials:
+            lines.append(f"{t.trial}: threshold {t.threshold:.6g} (monitor from frame "
+                         f"{t.start_frame}; gripper motion from {t.motion_from})")
+            lines += [f"  {e.t_s:8.3f} s  frame {e.frame:5d}  {e.kind:<12} {e.detail}"
+                      for e in t.events
+                      if e.kind in ("slip", "no_slip", "raise_grip", "release_grip")]
+            ignored = sum(1 for e in t.events if e.kind == "ignored_moving")
+            restarts = sum(1 for e in t.events if e.kind == "timer_restart")
+            line = (f"  {restarts} timer restarts, {ignored} frames above threshold ignored "
+                    "while the gripper moved")
+            if t.score is not None:
+                s = t.score
+                delay = (f", mean delay {1e3 * sum(s.delays_s) / len(s.delays_s):.0f} ms"
+                         if s.delays_s else "")
+                line += (f"; truth: {s.caught}/{s.n_interferences} caught, {s.missed} "
+                         f"missed, {s.false_slips} false slips{delay}")
+            lines.append(line)
+        tot = self.totals()
+        if tot["trials_scored"]:
+            rate = tot["detection_rate"]
+            lines.append(f"all: {tot['caught']}/{tot['interferences']} interferences caught"
+                         + (f" ({100 * rate:.0f} %)" if rate is not None else "")
+                         + f", {tot['false_slips']} false slips, {tot['raise_grip']} raise and "
+                         f"{tot['release_grip']} release commands")
+        return lines
+
 
 def parse_mesh(text: str) -> tuple[int, int]:
     """``"32x24"`` -> ``(32, 24)`` (columns, rows) by :func:`.mesh.parse_mesh`, its error

@@ -196,7 +196,15 @@ class DigitSceneResult:
                 "n_frames": self.n_frames, "px_per_mm": self.px_per_mm,
                 "elapsed_s": round(self.elapsed_s, 3),
                 "ingest": ingest_shell_commands(self.out_dir, self.px_per_mm,
-                                          presses=bool(self.presses), trials=bool(self.trials))}
+                                                presses=bool(self.presses),
+                                                trials=bool(self.trials))}
+
+    def summary_lines(self) -> list[str]:
+        s = self.as_dict()
+        return [f"digit-press -> {self.out_dir} (seed {self.seed}): "
+                f"{s['n_calibration_presses']} calibration presses, {s['n_trials']} trials "
+                f"({s['n_slip']} slipping), {s['n_frames']} frames, simulated in "
+                f"{self.elapsed_s:.1f} s", *(f"  then: {line}" for line in s["ingest"])]
 
 
 def ingest_shell_commands(out: Path, px_per_mm: float, *, presses: bool = True,

@@ -239,6 +239,14 @@ class TrialSlip:
             out["signal"] = [_finite_or_none(float(v)) for v in d.signal]
         return out
 
+    def verdict(self) -> str:
+        """``hit``, ``missed``, ``false alarm``, ``correct reject`` (``-`` without a label)."""
+        if self.score is None:
+            return "-"
+        if self.score.false_alarm:
+            return "hit + false alarm" if self.score.detected else "false alarm"
+        return "hit" if self.score.detected else "missed" if self.slip else "correct reject"
+
 
 def _finite_or_none(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
@@ -281,6 +289,7 @@ class SlipFileResult:
     rates: dict[str, Rates]
     best: dict[str, ScaleChoice]
     run_dir: str | None
+    plot: str | None = None
 
     def as_dict(self, *, with_signal: bool = True) -> dict[str, object]:
         return {
@@ -294,6 +303,33 @@ class SlipFileResult:
                         for src, r in self.rates.items()},
             "trials": [t.as_dict(with_signal=with_signal) for t in self.trials],
         }
+
+    def table(self) -> tuple[str, list[str], list[list[str]]]:
+        """Title, columns and one row per trial and source."""
+        cols = ["trial", "object", "source", "label", "onset (s)", "threshold",
+                "detected at (s)", "peak/static", "result"]
+        rows = []
+        for r in self.trials:
+            d = r.detection
+            rows.append([r.trial, r.object or "-", r.source,
+                         "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
+                         "-" if r.onset_s is None else f"{r.onset_s:.3f}", f"{d.threshold:.4g}",
+                         "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
+                         f"{d.peak_ratio():.1f}", r.verdict()])
+        return (f"Slip signal of {self.path} (mesh {self.mesh[0]}x{self.mesh[1]}, threshold "
+                f"{self.scale:g} x mean of {self.n_static} static signals)", cols, rows)
+
+    def summary_lines(self) -> list[str]:
+        lines = []
+        for src, rates in self.rates.items():
+            best = self.best[src]
+            lines.append(f"{src}: detection rate {rates.detection_rate:.2f} over "
+                         f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
+                         f"{rates.n_slip + rates.n_no_slip} trials; best scale {best.scale:g} "
+                         f"(as good: {best.best_from:g}-{best.best_to:g}; detection "
+                         f"{best.rates.detection_rate:.2f}, false alarms "
+                         f"{best.rates.false_alarms})")
+        return lines + ([f"wrote {self.plot}/slip_*.png"] if self.plot is not None else [])
 
 
 def trial_maps(trial: Trial, source: str, mapper: HeightMapper | None
@@ -402,6 +438,7 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                             None if run_dir is None else str(run_dir))
     if plot is not None:
         _plot_signals(result, plot)
+        result.plot = str(plot)
     return result
 
 
