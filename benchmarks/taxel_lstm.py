@@ -43,7 +43,12 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     from tactile_cli.store.trials import TactileFile
-    from tactile_cli.taxel import FeatureConfig, TaxelSceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
     from tactile_cli.taxel.pipeline import (
         PresetTrials,
         gnb_predict,

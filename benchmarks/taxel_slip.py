@@ -43,7 +43,12 @@ LEVELS = {"crosstalk": [0.0, 0.3, 0.6, 0.8, 0.9, 0.95, 0.99],
 
 
 def accuracy_table(seeds: list[int], work: Path) -> tuple[list[dict], dict]:
-    from tactile_cli.taxel import FeatureConfig, TaxelSceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
 
     per_seed, features = {}, None
     for seed in seeds:
@@ -70,7 +75,12 @@ def accuracy_table(seeds: list[int], work: Path) -> tuple[list[dict], dict]:
 
 def stability(seed: int, work: Path) -> list[dict]:
     from tactile_cli.errors import InputError
-    from tactile_cli.taxel import FeatureConfig, TaxelSceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
 
     rows = []
     for study, levels in LEVELS.items():

@@ -244,7 +244,8 @@ def test_help() -> None:
 
 def test_shipped_config_repeats_the_defaults() -> None:
     repo = Path(__file__).resolve().parents[2]
-    assert load_digit_scene_config(repo / "configs" / "scene_digit_press.yaml") == DigitSceneConfig()
+    shipped = load_digit_scene_config(repo / "configs" / "scene_digit_press.yaml")
+    assert shipped == DigitSceneConfig()
 
 
 def test_held_grip_drifts_slowly() -> None:
