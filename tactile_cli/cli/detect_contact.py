@@ -16,9 +16,9 @@ from ._options import JsonOption
 from ._output import print_result
 
 FLAGS: dict[str, Flag] = {"band_hz": "--band", "band_width_hz": "--band-width",
-                          "plot": "--plot", "out": "--samples-out", "trial": "--trial",
-                          "trials": "--trial", "rate_hz": "--rate", "scenario": "--scenario",
-                          "follow_s": "--wait"}
+                          "width_hz": "--band-width", "plot": "--plot", "out": "--samples-out",
+                          "trial": "--trial", "trials": "--trial", "rate_hz": "--rate",
+                          "scenario": "--scenario", "follow_s": "--wait"}
 
 
 class Scenario(enum.StrEnum):

@@ -35,7 +35,8 @@ RATE_PERCENT = {"info": 3, "validate": 4, "plot": 3, "grade": 5, "train": 3, "ev
                 "accel-prepare": 2, "detect-delay": 1, "features": 1, "slip-interface": 1,
                 "vibro-model": 5, "detect-contact": 2, "normal-labels": 3, "heightmap": 2,
                 "slip-signal": 3, "monitor": 1, "simulate": 2, "export": 4, "sweep": 5}
-ALWAYS = ("clash", "symlink")  # kinds run in full: few cases, each a different command
+ALWAYS = ("clash", "symlink", "sacred")  # kinds run in full: few cases, each a different
+# command (sacred: an output that is the input, issue 33)
 
 
 def _source_key() -> str:
