@@ -407,7 +407,9 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
     from ..store.atomic import check_output_file
     from ..store.outdir import check_output_folder, output_folder
     from ..store.writer import StoreWriter
+    from .heightmap import absolute_folder
 
+    plot_dir = None if plot_dir is None else absolute_folder(plot_dir)
     check_outputs({"out": out, "plot_dir": plot_dir}, [calibration])
     check_output_file(out, overwrite=overwrite)
     if plot_dir is not None:

@@ -114,6 +114,14 @@ def frames_px_per_mm(tf: TactileFile, trial: Trial, px_per_mm: float | None) -> 
     return check_px_per_mm(value, what="px_per_mm", path=tf.path, where=f"/sensors/{name}")
 
 
+def absolute_folder(folder: str | Path) -> Path:
+    """``folder`` made absolute, ``.`` and ``..`` removed (an output folder named ``.`` is
+    the current folder, built beside it like any other)."""
+    import os
+
+    return Path(os.path.abspath(folder))
+
+
 def check_frame_times(t_s: np.ndarray, trial: Trial) -> np.ndarray:
     """``t_s`` (n_frames,) of ``trial``'s frames, refused unless finite and strictly
     increasing (repeated times would make every frame-to-frame change look instant)."""
@@ -275,6 +283,7 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
     from ..store.outdir import output_folder
     from ..threads import check_threads, limit_threads
 
+    plot = None if plot is None else absolute_folder(plot)
     _check_heightmap_outputs(path, run_dir, out, truth_dir, plot, overwrite=overwrite)
     threads = default_workers() if workers is None else check_threads(workers, "workers")
     progress = progress or NullProgress()
@@ -381,6 +390,6 @@ def read_height_maps(trial: Trial) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 __all__ = ["PX_PER_MM_RANGE", "SENSOR", "STREAM", "HeightMapper", "HeightmapResult",
-           "TrialHeights", "check_frame_times", "check_px_per_mm", "frame_trials",
-           "frames_px_per_mm", "heightmap_file", "load_truth", "read_height_maps",
-           "trial_heights"]
+           "TrialHeights", "absolute_folder", "check_frame_times", "check_px_per_mm",
+           "frame_trials", "frames_px_per_mm", "heightmap_file", "load_truth",
+           "read_height_maps", "trial_heights"]

@@ -359,8 +359,10 @@ def monitor_input(path: str | Path, *, ingest_frames: IngestFrames | None = None
 
     from ..input_guard import check_outputs
     from ..store.outdir import check_output_folder, output_folder
+    from .heightmap import absolute_folder
 
     path = Path(path)
+    plot = None if plot is None else absolute_folder(plot)
     if not path.exists():
         raise InputError("file not found", path=path)
     model = None if model_run is None else Path(model_run) / "model.pt"

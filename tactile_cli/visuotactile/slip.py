@@ -38,6 +38,7 @@ from ..threads import limit_threads
 from .heightmap import (
     STREAM,
     HeightMapper,
+    absolute_folder,
     check_frame_times,
     frames_px_per_mm,
     read_height_maps,
@@ -377,6 +378,7 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
     ``workers``: threads of the maps (BLAS and OpenMP included; results do not depend on
     it). ``plot``: a folder for one PNG per trial and source (S, threshold, onset and
     detection), same-named files replaced; checked before any work."""
+    plot = None if plot is None else absolute_folder(plot)
     threads = _check_outputs(path, run_dir, plot, workers)
     if source not in SOURCES:
         raise InputError(f"`source` (={source!r}) must be one of {', '.join(SOURCES)}")
