@@ -43,7 +43,12 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     from tactile_cli.store.trials import TactileFile
-    from tactile_cli.taxel import FeatureConfig, SceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
     from tactile_cli.taxel.pipeline import (
         PresetTrials,
         gnb_predict,
@@ -54,7 +59,7 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         scene = Path(tmp) / f"s{args.seed}.h5"
-        simulate_taxel_slip(SceneConfig(presets=("pvdf",)), scene, seed=args.seed)
+        simulate_taxel_slip(TaxelSceneConfig(presets=("pvdf",)), scene, seed=args.seed)
         fcfg = FeatureConfig()
         t0 = time.perf_counter()
         nb = slip_interface(scene, fcfg)

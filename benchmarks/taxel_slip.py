@@ -43,12 +43,17 @@ LEVELS = {"crosstalk": [0.0, 0.3, 0.6, 0.8, 0.9, 0.95, 0.99],
 
 
 def accuracy_table(seeds: list[int], work: Path) -> tuple[list[dict], dict]:
-    from tactile_cli.taxel import FeatureConfig, SceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
 
     per_seed, features = {}, None
     for seed in seeds:
         path = work / f"s{seed}.h5"
-        simulate_taxel_slip(SceneConfig(), path, seed=seed, overwrite=True)
+        simulate_taxel_slip(TaxelSceneConfig(), path, seed=seed, overwrite=True)
         res = slip_interface(path, FeatureConfig())
         per_seed[seed] = res.as_dict()["scores"]
         if features is None:
@@ -70,12 +75,17 @@ def accuracy_table(seeds: list[int], work: Path) -> tuple[list[dict], dict]:
 
 def stability(seed: int, work: Path) -> list[dict]:
     from tactile_cli.errors import InputError
-    from tactile_cli.taxel import FeatureConfig, SceneConfig, simulate_taxel_slip, slip_interface
+    from tactile_cli.taxel import (
+        FeatureConfig,
+        TaxelSceneConfig,
+        simulate_taxel_slip,
+        slip_interface,
+    )
 
     rows = []
     for study, levels in LEVELS.items():
         for level in levels:
-            cfg = SceneConfig(trials_per_class=20, **{study: level})
+            cfg = TaxelSceneConfig(trials_per_class=20, **{study: level})
             path = work / f"stab_{study}_{level}.h5"
             simulate_taxel_slip(cfg, path, seed=seed, overwrite=True)
             try:

@@ -36,7 +36,7 @@ from tactile_cli._version import __version__  # noqa: E402
 from tactile_cli.store.trials import TactileFile  # noqa: E402
 from tactile_cli.vibro import (  # noqa: E402
     DetectorConfig,
-    SceneConfig,
+    VibroTouchSceneConfig,
     detect_contacts,
     simulate_vibrotouch,
 )
@@ -47,7 +47,7 @@ HELD_OUT_SEEDS = (1000, 1001, 1002)
 FIGURES = ROOT / "benchmarks" / "figures"
 
 
-def run_scene(scene: SceneConfig, detector: DetectorConfig, seed: int, work: Path,
+def run_scene(scene: VibroTouchSceneConfig, detector: DetectorConfig, seed: int, work: Path,
               tag: str = "") -> dict:
     path = work / f"scene_{seed}{tag}.h5"
     if not path.exists():
@@ -75,7 +75,7 @@ def combine(rows: list[dict]) -> dict:
 
 def targets(work: Path, seeds: tuple[int, ...]) -> dict:
     started = time.perf_counter()
-    rows = [run_scene(SceneConfig(), DetectorConfig(), s, work) for s in seeds]
+    rows = [run_scene(VibroTouchSceneConfig(), DetectorConfig(), s, work) for s in seeds]
     out = combine(rows)
     out.update({
         "seeds": list(seeds), "tuning_seeds": list(TUNING_SEEDS), "per_seed": rows,
@@ -89,7 +89,7 @@ def targets(work: Path, seeds: tuple[int, ...]) -> dict:
 
 
 def stability(work: Path, seed: int) -> dict:
-    base = SceneConfig(touch_trials=0)
+    base = VibroTouchSceneConfig(touch_trials=0)
     det = DetectorConfig()
     sweeps = {
         "contact_scale": [1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01],
@@ -104,13 +104,13 @@ def stability(work: Path, seed: int) -> dict:
                 scene, detector, tag = base, DetectorConfig(
                     band_hz=(det.band_hz[0] + v, det.band_hz[1] + v)), "_base"
             elif key == "contact_scale":  # softer skin and object: every touch lighter
-                scene = SceneConfig.model_validate({
+                scene = VibroTouchSceneConfig.model_validate({
                     **base.model_dump(),
                     "light_stiffness_n_m": base.light_stiffness_n_m * v,
                     "stiffening_n_m2": base.stiffening_n_m2 * v})
                 detector, tag = det, f"_{key}_{v:g}"
             else:
-                scene = SceneConfig.model_validate({**base.model_dump(), key: v})
+                scene = VibroTouchSceneConfig.model_validate({**base.model_dump(), key: v})
                 detector, tag = det, f"_{key}_{v:g}"
             t = run_scene(scene, detector, seed, work, tag)
             rows.append({"value": v, "rate": t["vibration_detected"] / t["n_contacts"],

@@ -39,7 +39,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tactile_cli.visuotactile.config import SceneConfig  # noqa: E402
+from tactile_cli.visuotactile.config import DigitSceneConfig  # noqa: E402
 from tactile_cli.visuotactile.stability import (  # noqa: E402
     AXES,
     DEFAULT_LEVELS,
@@ -86,7 +86,7 @@ def main() -> int:
                     help="brightness-step levels (relative step)")
     args = ap.parse_args()
 
-    cfg = SceneConfig.model_validate(QUICK if args.quick else {"trials": DEFAULT_TRIALS})
+    cfg = DigitSceneConfig.model_validate(QUICK if args.quick else {"trials": DEFAULT_TRIALS})
     seeds = [101] if args.quick and args.seeds == [7] else args.seeds
     mapper = None
     if args.model is not None:

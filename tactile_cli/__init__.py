@@ -53,12 +53,25 @@ _VERBS = {
     # the active-vibration chain (paper 003)
     "simulate_vibrotouch": "vibro.simulate",
     "model_spectra": "vibro.model",
+    "model_file": "vibro.pipeline",
     "detect_contacts": "vibro.pipeline",
+    "detect_contact_file": "vibro.pipeline",
     "find_band": "vibro.pipeline",
+    "follow_input": "vibro.stream",
     # the taxel-array chain (paper 004)
     "simulate_taxel_slip": "taxel.simulate",
     "slip_interface": "taxel.pipeline",
-    "write_feature_stream": "taxel.pipeline",
+    "slip_interface_file": "taxel.pipeline",
+    "write_taxel_features": "taxel.pipeline",
+    # the visuotactile chain (paper 002)
+    "simulate_digit_press": "visuotactile.simulate",
+    "simulate_digit_avoidance": "visuotactile.avoidance",
+    "write_normal_labels": "visuotactile.calibrate",
+    "heightmap_file": "visuotactile.heightmap",
+    "slip_signal_file": "visuotactile.slip",
+    "monitor_input": "visuotactile.monitor_replay",
+    # features of any multichannel stream
+    "write_stream_features": "spectral.stream_features",
     # methods any stream enters
     "fit_fos_file": "fos.fit_file",
     "fit_files": "fos.fit_files",

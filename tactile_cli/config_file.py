@@ -336,3 +336,32 @@ def load_yaml_model(path: str | Path, model: Any, *, not_a_mapping: str,
     except ValidationError as exc:
         raise validation_error(exc, text, path, describe=describe) from None
 
+
+
+def with_overrides(config: Any, overrides: Mapping[str, tuple[str, Any]]) -> Any:
+    """A copy of the pydantic config ``config`` with ``overrides`` applied and validated
+    like the file: argument name -> (dotted key, value), None values left out. A value
+    the config refuses is one :class:`InputError` naming the argument and the value
+    (``"`trials` (=0): Input should be greater than or equal to 1"``), so the CLI can spell
+    it as its flag."""
+    from pydantic import ValidationError
+
+    data = config.model_dump()
+    given = {arg: (key, value) for arg, (key, value) in overrides.items() if value is not None}
+    for key, value in given.values():
+        *parents, last = key.split(".")
+        node = data
+        for part in parents:
+            node = node[part]
+        node[last] = value
+    try:
+        return type(config).model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = ".".join(str(p) for p in err["loc"])
+        msg = str(err["msg"]).removeprefix("Value error, ")
+        for arg, (key, value) in given.items():
+            if loc == key or loc.startswith(key + "."):
+                shown = ",".join(map(str, value)) if isinstance(value, list | tuple) else value
+                raise InputError(f"`{arg}` (={shown}): {msg}") from None
+        raise InputError(describe_validation(err)) from None

@@ -45,6 +45,9 @@ ACCEL_STREAM = "accel"
 VELOCITY_STREAM = "velocity"
 MOTION_LABEL = "motion"
 SPEED_LABEL = "speed_cm_s"
+#: Most segments (trials) one prepared file may hold: a segment shorter than a training
+#: window only makes the file (and every later read of it) slow.
+MAX_SEGMENTS = 10_000
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,11 @@ class PrepareResult:
         return {"out": str(self.out), "n_recordings": self.n_recordings,
                 "n_segments": self.n_segments, "segment_s": self.segment_s,
                 "cutoff_hz": self.cutoff_hz, "sample_rate_hz": self.sample_rate_hz}
+
+    def summary_lines(self) -> list[str]:
+        return [f"wrote {self.out}: {self.n_segments} segments of {self.segment_s:g} s from "
+                f"{self.n_recordings} recordings"
+                + (f", band-limited to {self.cutoff_hz:g} Hz" if self.cutoff_hz else "")]
 
 
 def speed_cm_s(v_slip_m_s: np.ndarray, v_slide_m_s: np.ndarray) -> np.ndarray:
@@ -94,6 +102,40 @@ def segment_bounds(n: int, segment_samples: int) -> list[tuple[int, int]]:
     return list(zip(edges[:-1], edges[1:], strict=True))
 
 
+def check_settings(segment_s: float, cutoff_hz: float | None) -> None:
+    """``segment_s`` and ``cutoff_hz`` positive finite numbers (one InputError)."""
+    if not (np.isfinite(segment_s) and segment_s > 0):
+        raise InputError(f"`segment_s` (={segment_s}) must be a positive number of seconds")
+    if cutoff_hz is not None and not (np.isfinite(cutoff_hz) and cutoff_hz > 0):
+        raise InputError(f"`cutoff_hz` (={cutoff_hz}) must be a positive frequency in Hz")
+
+
+def check_segments(f: TactileFile, segment_s: float, cutoff_hz: float | None) -> None:
+    """Before any work, from the first recording (its rate and length, taken as every
+    recording's): segments of at least one sample, at most about :data:`MAX_SEGMENTS` of
+    them, and a cut-off the resampling can reach
+    (:func:`tactile_cli.spectral.lowest_cutoff_hz`)."""
+    from ..spectral import lowest_cutoff_hz
+
+    first = f.trial(f.trial_names[0])
+    if not first.has_signal(ACCEL_STREAM):
+        return  # the loop names the missing stream
+    sig = first.signal(ACCEL_STREAM)
+    rate = float(sig.sample_rate_hz)
+    step = int(round(segment_s * rate))
+    if step < 1:
+        raise InputError(f"`segment_s` (={segment_s:g}) is shorter than one sample of the "
+                         f"{rate:g} Hz recordings; give {1 / rate:.3g} s or more", path=f.path)
+    n = -(-len(sig.data) // step) * len(f.trial_names)
+    if n > MAX_SEGMENTS:
+        raise InputError(f"`segment_s` (={segment_s:g}) cuts the recordings into about {n:,} "
+                         f"segments of {step} samples (at most {MAX_SEGMENTS:,}); give a "
+                         "longer segment", path=f.path)
+    if cutoff_hz is not None and cutoff_hz < lowest_cutoff_hz(rate):
+        raise InputError(f"`cutoff_hz` (={cutoff_hz:g}) is below {lowest_cutoff_hz(rate):g} "
+                         f"Hz, the lowest cut-off of the {rate:g} Hz recordings", path=f.path)
+
+
 def prepare_file(src: str | Path, out: str | Path, *, segment_s: float = 2.0,
                  cutoff_hz: float | None = None, overwrite: bool = False,
                  progress: Progress | None = None, command: str | None = None
@@ -104,11 +146,13 @@ def prepare_file(src: str | Path, out: str | Path, *, segment_s: float = 2.0,
     ``accel`` or ``velocity`` stream or the ``motion`` label, when ``segment_s`` is not
     positive or ``cutoff_hz`` not positive.
     """
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+
     progress = progress or NullProgress()
-    if not segment_s > 0:
-        raise InputError(f"`segment_s` (={segment_s}) must be positive")
-    if cutoff_hz is not None and not cutoff_hz > 0:
-        raise InputError(f"`cutoff_hz` (={cutoff_hz}) must be positive")
+    check_settings(segment_s, cutoff_hz)
+    check_outputs({"out": out}, [src])
+    check_output_file(out, overwrite=overwrite)
     src = Path(src)
     config = {"segment_s": segment_s, "cutoff_hz": cutoff_hz}
     n_segments = 0
@@ -116,6 +160,7 @@ def prepare_file(src: str | Path, out: str | Path, *, segment_s: float = 2.0,
         names = f.trial_names
         if not names:
             raise InputError("the file has no trials", path=src)
+        check_segments(f, segment_s, cutoff_hz)
         with StoreWriter(out, command=command or current_command(), config=config,
                          overwrite=overwrite) as w:
             w.add_source(src)

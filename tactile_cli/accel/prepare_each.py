@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 from ..batch import FileBatchResult, FileCounts, FileItem, plan_outputs, run_each
-from ..errors import InputError
 from ..store.provenance import current_command
 
 
@@ -49,12 +48,16 @@ def prepare_each(
 ) -> FileBatchResult:
     """Prepare each input into ``<out_dir>/<input stem>.h5`` (see the module docstring);
     never raises for a failed input. Refused before any work: a bad ``segment_s`` or
-    ``cutoff_hz``, a missing input, two inputs of one stem, an output that is a folder."""
-    if not segment_s > 0:
-        raise InputError(f"`segment_s` (={segment_s}) must be positive")
-    if cutoff_hz is not None and not cutoff_hz > 0:
-        raise InputError(f"`cutoff_hz` (={cutoff_hz}) must be positive")
+    ``cutoff_hz``, a missing input, two inputs of one stem, an output that is a folder or
+    an input, a folder that cannot be written."""
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder
+    from .prepare import check_settings
+
+    check_settings(segment_s, cutoff_hz)
     items = plan_outputs(inputs, out_dir, overwrite=overwrite)
+    check_outputs([item.output for item in items], inputs)
+    check_output_folder(out_dir, merge=True)
     out = Path(out_dir)
     if on_plan is not None:
         on_plan(items)

@@ -180,6 +180,11 @@ class VibroSceneResult:
                 "n_recordings": len(self.recordings), "duration_s": self.duration_s,
                 "elapsed_s": round(self.elapsed_s, 3), "recordings": list(self.recordings)}
 
+    def summary_lines(self) -> list[str]:
+        return [f"vibro-slip -> {self.out_dir} (seed {self.seed}): {len(self.recordings)} "
+                f"recordings, {self.duration_s:.1f} s in all, simulated in "
+                f"{self.elapsed_s:.1f} s"]
+
 
 def write_csv(path: Path, accel: np.ndarray, velocity: np.ndarray) -> None:
     """The 8-column CSV with a header: accelerations to 6 decimals, velocities to 5."""
@@ -190,7 +195,7 @@ def write_csv(path: Path, accel: np.ndarray, velocity: np.ndarray) -> None:
         np.savetxt(f, table, fmt=fmt, delimiter=",", newline="\n")
 
 
-def ingest_command(out: Path) -> str:
+def ingest_shell_command(out: Path) -> str:
     """The shell command that ingests a scene folder (recorded in its scene.json)."""
     return shlex.join(["tactile", "ingest", str(out), "--format", "accel-tree", "--out",
                        "scene.h5"])
@@ -236,7 +241,7 @@ def simulate_vibro_slip(cfg: VibroSceneConfig, out_dir: str | Path, *, seed: int
                 "command": command if command is not None else current_command(),
                 "config": cfg.model_dump(mode="json"), "columns": list(CSV_COLUMNS),
                 "recordings": truths,
-                "ingest": ingest_command(out),
+                "ingest": ingest_shell_command(out),
             }
             (tmp / "scene.json").write_text(json.dumps(scene, indent=2) + "\n",
                                             encoding="utf-8")

@@ -39,6 +39,8 @@ from . import plot as _plot
 from . import report as _report
 from . import samples as _samples
 from . import simulate as _simulate
+from . import simulate_avoidance as _simulate_avoidance
+from . import simulate_digit_press as _simulate_digit_press
 from . import slip_interface as _slip_interface
 from . import slip_rate as _slip_rate
 from . import slip_signal as _slip_signal
@@ -179,6 +181,8 @@ app.command("grade", help="Grade the pressing force of every trial (fuzzy, Table
     _grade.grade_command
 )
 app.add_typer(_simulate.app, name="simulate")
+_simulate.app.command("digit-press")(_simulate_digit_press.digit_press_command)
+_simulate.app.command("digit-avoidance")(_simulate_avoidance.digit_avoidance_command)
 app.add_typer(_features.app, name="features")
 app.command("slip-interface", help="Object/hand or object/world slip from taxel arrays: "
             "naive Bayes on power ratio and group coherence, nested CV (paper 004).")(

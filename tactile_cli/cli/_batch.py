@@ -102,5 +102,22 @@ def finish_batch(result: FileBatchResult, *, as_json: bool,
         raise typer.Exit(code=EXIT_BAD_INPUT)
 
 
+def run_file_batch(verb: str, run: Callable[..., FileBatchResult], *,
+                   progress: bool | None, as_json: bool, flags: dict[str, Any],
+                   describe: Callable[[FileItem], str] | None = None,
+                   todo: str = "to do") -> None:
+    """``run(on_plan=, on_progress=, on_item=)`` (a library batch verb with its arguments
+    bound) with a :class:`FileBatchPrinter`, then :func:`finish_batch`; ``flags``: the
+    command's table for :func:`to_flags`."""
+    from ._errors import COMMON_FLAGS, to_flags
+
+    printer = FileBatchPrinter(verb, progress=progress, todo=todo, describe=describe,
+                               flags=lambda t: to_flags(t, {**COMMON_FLAGS, **flags}))
+    with printer.running():
+        result = run(on_plan=printer.on_plan, on_progress=printer.on_progress,
+                     on_item=printer.on_item)
+    finish_batch(result, as_json=as_json)
+
+
 __all__ = ["BATCH_FLAGS", "FileBatchPrinter", "SchedulerOption", "WorkersOption",
-           "finish_batch", "scheduler_option", "workers_option"]
+           "finish_batch", "run_file_batch", "scheduler_option", "workers_option"]

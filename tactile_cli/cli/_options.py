@@ -17,7 +17,7 @@ import math
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import typer
 
@@ -106,5 +106,16 @@ def runs_and_files(paths: list[Path], data: list[Path] | None) -> tuple[list[Pat
     return runs, files
 
 
-__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "NoArgsIsHelpError",
+#: Options several commands share, spelt once (the simulators, the chain commands).
+SceneConfigOption = Annotated[Path | None, typer.Option(
+    "--config", "-c", help="Scene config YAML (see configs/scene_<scene>.yaml); default: the "
+    "built-in defaults, which that file repeats.", metavar="CONFIG")]
+SeedOption = Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")]
+OverwriteOption = Annotated[bool, typer.Option(help="Replace an existing output (only once "
+                                               "the new one is complete).")]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON.")]
+
+
+__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "JsonOption",
+           "NoArgsIsHelpError", "OverwriteOption", "SceneConfigOption", "SeedOption",
            "data_files", "finite_float_options", "runs_and_files", "usage_error"]

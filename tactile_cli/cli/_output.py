@@ -3,11 +3,13 @@ tables, and the progress of a long command (a bar on a terminal, else one line p
 
 The library returns dataclasses and plain text (:mod:`tactile_cli.learn.tables` turns
 results into :class:`~tactile_cli.learn.tables.TextTable` rows); this module only renders
-them.
+them; results that render themselves (``table()``, ``summary_lines()``) go through
+:func:`print_result`.
 """
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -113,4 +115,33 @@ class Progress:
             yield self
 
 
-__all__ = ["Progress", "echo_json", "print_blocks", "warn"]
+def print_table(title: str, columns: list[str], rows: list[list[str]], *,
+                width: int | None = 120) -> None:
+    """A rich table on stdout, every column right-aligned (``width``: columns of the
+    console, None for the terminal's)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=title)
+    for col in columns:
+        table.add_column(col, justify="right")
+    for row in rows:
+        table.add_row(*row)
+    Console(width=width).print(table)
+
+
+def print_result(result: Any, *, as_json: bool, indent: int | None = 2,
+                 width: int | None = 120) -> None:
+    """``result.as_dict()`` as JSON, or its ``table()`` (when it has one and it is not
+    None) and its ``summary_lines()``."""
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=indent))
+        return
+    table = result.table() if hasattr(result, "table") else None
+    if table is not None:
+        print_table(*table, width=width)
+    for line in result.summary_lines():
+        typer.echo(line)
+
+
+__all__ = ["Progress", "echo_json", "print_blocks", "print_result", "print_table", "warn"]

@@ -3,15 +3,16 @@ accel-tree recordings as training segments."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
 from ..errors import InputError
-from ._batch import BATCH_FLAGS, FileBatchPrinter, SchedulerOption, WorkersOption, finish_batch
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption, run_file_batch
+from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"segment_s": "--segment-s", "cutoff_hz": "--cutoff-hz",
@@ -39,52 +40,35 @@ def accel_prepare_command(
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
                                             "--out-dir: prepare up-to-date inputs again).")
                          ] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Cut accelerometer recordings into segments (trials labelled `segment`, for the
     80/10/10 split by segment), add the per-sample `speed_cm_s` target and optionally limit
     the bandwidth (paper 001, secs. 4 and 6.4)."""
 
-    def body() -> None:
-        from ..accel.prepare import prepare_file
+    from ..accel.prepare import prepare_file
+    from ..accel.prepare_each import prepare_each
 
+    def body():
         if (out is None) == (out_dir is None):
             raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
                              "input)")
         if out_dir is not None:
-            _prepare_each()
-            return
+            return run_file_batch("accel-prepare", lambda **printing: prepare_each(
+                inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz, overwrite=overwrite,
+                scheduler=scheduler, workers=workers, **printing), progress=progress,
+                as_json=as_json, flags=FLAGS, todo="to prepare",
+                describe=lambda item: f"-> {item.output} ({item.value['n_segments']} segments)")
         if len(inputs) > 1:
             raise InputError("--out takes one input; give --out-dir FOLDER for several",
                              path=inputs[1])
         if scheduler is not None or workers is not None:
             raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
-        src = inputs[0]
         with RichProgress(enabled=progress) as bar:
-            result = prepare_file(src, out, segment_s=segment_s, cutoff_hz=cutoff_hz,
-                                  overwrite=overwrite, progress=bar)
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-            return
-        typer.echo(f"wrote {result.out}: {result.n_segments} segments of {segment_s:g} s from "
-                   f"{result.n_recordings} recordings"
-                   + (f", band-limited to {cutoff_hz:g} Hz" if cutoff_hz else ""))
+            return prepare_file(inputs[0], out, segment_s=segment_s, cutoff_hz=cutoff_hz,
+                                overwrite=overwrite, progress=bar)
 
-    def _prepare_each() -> None:
-        from ..accel.prepare_each import prepare_each
-
-        def describe(item: Any) -> str:
-            return f"-> {item.output} ({item.value['n_segments']} segments)"
-
-        printer = FileBatchPrinter("accel-prepare", progress=progress, todo="to prepare",
-                                   describe=describe,
-                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
-        with printer.running():
-            result = prepare_each(inputs, out_dir, segment_s=segment_s, cutoff_hz=cutoff_hz,
-                                  overwrite=overwrite, scheduler=scheduler, workers=workers,
-                                  on_plan=printer.on_plan, on_progress=printer.on_progress,
-                                  on_item=printer.on_item)
-        finish_batch(result, as_json=as_json)
-
-    run_guarded(body, flags=FLAGS)
+    result = run_guarded(body, flags=FLAGS)
+    if out_dir is None:
+        print_result(result, as_json=as_json)

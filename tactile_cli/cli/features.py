@@ -3,7 +3,6 @@ stream."""
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -11,11 +10,15 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import InputError
-from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption, run_file_batch
+from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir",
+                          "out": "--out", "config": "--config", "stream": "--stream",
+                          "window_s": "--window-s", "hop_s": "--hop-s", "nperseg": "--nperseg",
                           **BATCH_FLAGS}
 
 app = typer.Typer(
@@ -25,6 +28,42 @@ app = typer.Typer(
     add_completion=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
+
+
+def _bands(texts: list[str] | None) -> dict[str, tuple[float, float]]:
+    """``["mid=100-400"]`` -> ``{"mid": (100.0, 400.0)}``."""
+    bands: dict[str, tuple[float, float]] = {}
+    for text in texts or []:
+        name, sep, span = text.partition("=")
+        lo, dash, hi = span.partition("-")
+        try:
+            if not (sep and dash and name.strip()):
+                raise ValueError
+            bands[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. mid=100-400"
+                             ) from None
+    return bands
+
+
+def _check_modes(files: list[Path], out: Path | None, out_dir: Path | None,
+                 stream: str | None, extras: dict[str, Any]) -> None:
+    """Which options go together (one-line errors before any work)."""
+    if (out is None) == (out_dir is None):
+        raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per input)")
+    if out_dir is not None and stream is None:
+        raise InputError("--out-dir goes with --stream NAME (the taxel-slip layout is one "
+                         "file per scene: --out)")
+    if out is not None and len(files) > 1:
+        raise InputError("--out takes one input; give --out-dir FOLDER for several",
+                         path=files[1])
+    if out is not None and (extras["scheduler"] is not None or extras["workers"] is not None):
+        raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
+    if stream is None and (extras["groups"] or extras["bands"]):
+        raise InputError("--group and --band go with --stream NAME")
+    if stream is not None and extras["config"] is not None:
+        raise InputError("--config is the taxel-slip layout's; with --stream give --window-s, "
+                         "--hop-s, --nperseg, --band and --group")
 
 
 @app.command("spectral")
@@ -64,8 +103,7 @@ def spectral_command(
         "--nperseg", min=8, help="With --stream: Welch segment (samples; at most the "
         "window), overlap half.")] = 64,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
-                       ] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Power ratio Gamma and single- and multi-finger group square coherence G2 (paper 004)
@@ -74,112 +112,33 @@ def spectral_command(
     world), for tactile train CONFIG --data OUT. With --stream NAME: the same features of
     any multichannel stream (accelerometers, vibration fingers, taxels of any layout), one
     array or several (--group), the stream's per-sample labels taken at each window's end."""
+    from ..spectral.stream_features import stream_features_each, write_stream_features
+    from ..taxel import write_taxel_features
 
-    def body() -> None:
-        from ..store.provenance import current_command, provenance_record
-        from ..taxel import FeatureConfig, load_feature_config, write_feature_stream
-
-        if (out is None) == (out_dir is None):
-            raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per "
-                             "input)")
-        if out_dir is not None:
-            if stream is None:
-                raise InputError("--out-dir goes with --stream NAME (the taxel-slip layout "
-                                 "is one file per scene: --out)")
-            _each_stream(out_dir)
-            return
-        if len(files) > 1:
-            raise InputError("--out takes one input; give --out-dir FOLDER for several",
-                             path=files[1])
-        if scheduler is not None or workers is not None:
-            raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
-        file = files[0]
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        if out.exists() and not overwrite:
-            raise InputError("output exists; pass --overwrite to replace it", path=out)
-        if stream is not None:
-            _any_stream(file, out)
-            return
-        if group or band:
-            raise InputError("--group and --band go with --stream NAME")
-        cfg = load_feature_config(config) if config is not None else FeatureConfig()
-        record = provenance_record([file] + ([config] if config else []),
-                                   cfg.model_dump(mode="json"))
-        with RichProgress(enabled=progress) as bar:
-            result = write_feature_stream(file, out, cfg, command=current_command(),
-                                          provenance=record, overwrite=overwrite,
-                                          progress=bar)
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-            return
-        flagged = [p for p, bad in result.rank_deficient.items() if bad]
-        typer.echo(f"wrote {result.out}: {result.n_trials} trial(s), {result.n_windows} "
-                   f"windows of {result.window_s:g} s every {result.hop_s:g} s, "
-                   f"{len(result.channels)} channels"
-                   + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
-                      if flagged else ""))
-
-    def _settings() -> dict[str, Any]:
-        if config is not None:
-            raise InputError("--config is the taxel-slip layout's; with --stream give "
-                             "--window-s, --hop-s, --nperseg, --band and --group")
-        bands: dict[str, tuple[float, float]] = {}
-        for text in band or []:
-            name, sep, span = text.partition("=")
-            lo, dash, hi = span.partition("-")
-            try:
-                bands[name.strip()] = (float(lo), float(hi))
-            except ValueError:
-                raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
-                                 "mid=100-400") from None
-            if not (sep and dash and name.strip()):
-                raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
-                                 "mid=100-400")
+    def settings() -> dict[str, Any]:
         groups = [[g.strip() for g in text.split(",") if g.strip()] for text in group or []]
         return {"stream": stream, "window_s": window_s, "hop_s": hop_s, "nperseg": nperseg,
-                "bands_hz": bands, "groups": groups or None}
+                "bands_hz": _bands(band), "groups": groups or None}
 
-    def _each_stream(folder: Path) -> None:
-        from ..spectral.stream_features import stream_features_each
-        from ._batch import FileBatchPrinter, finish_batch
-
-        def describe(item: Any) -> str:
-            return f"-> {item.output} ({item.value['n_windows']} windows)"
-
-        printer = FileBatchPrinter("features", progress=progress, todo="to do",
-                                   describe=describe,
-                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
-        settings = _settings()
-        with printer.running():
-            result = stream_features_each(files, folder, settings=settings,
-                                          overwrite=overwrite, scheduler=scheduler,
-                                          workers=workers, on_plan=printer.on_plan,
-                                          on_progress=printer.on_progress,
-                                          on_item=printer.on_item)
-        finish_batch(result, as_json=as_json)
-
-    def _any_stream(file: Path, out: Path) -> None:
-        from ..spectral.stream_features import write_stream_features
-        from ..store.provenance import current_command
-
-        settings = _settings()
+    def body() -> Any:
+        _check_modes(files, out, out_dir, stream, {"scheduler": scheduler, "workers": workers,
+                                                   "groups": group, "bands": band,
+                                                   "config": config})
+        if out_dir is not None:
+            return run_file_batch("features", lambda **printing: stream_features_each(
+                files, out_dir, settings=settings(), overwrite=overwrite, scheduler=scheduler,
+                workers=workers, **printing), progress=progress, as_json=as_json, flags=FLAGS,
+                describe=lambda item: f"-> {item.output} ({item.value['n_windows']} windows)")
         with RichProgress(enabled=progress) as bar:
-            result = write_stream_features(
-                file, out, command=current_command(), config=settings,
-                overwrite=overwrite, progress=bar, **settings)
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-        else:
-            typer.echo(f"wrote {result.out}: {result.n_trials} trial(s), {result.n_windows} "
-                       f"windows of {window_s:g} s every {hop_s:g} s, "
-                       f"{len(result.channels)} channels from {len(result.groups)} "
-                       f"array(s) of {stream}"
-                       + (f"; rank-deficient bands (G2 biased up): "
-                          f"{', '.join(result.rank_deficient)}" if result.rank_deficient
-                          else ""))
-        if result.too_short:
-            print(f"tactile: note: left out, shorter than one window: "
-                  f"{', '.join(result.too_short)}", file=sys.stderr)
+            if stream is None:
+                return write_taxel_features(files[0], out, config=config, overwrite=overwrite,
+                                            progress=bar)
+            return write_stream_features(files[0], out, config=settings(),
+                                         overwrite=overwrite, progress=bar, **settings())
 
-    run_guarded(body, flags=FLAGS)
+    result = run_guarded(body, flags=FLAGS)
+    if out_dir is None:
+        print_result(result, as_json=as_json)
+    if out_dir is None and stream is not None and result.too_short:
+        print(f"tactile: note: left out, shorter than one window: "
+              f"{', '.join(result.too_short)}", file=sys.stderr)

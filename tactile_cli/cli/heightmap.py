@@ -3,14 +3,14 @@ sec. II-B, eq. 9 and the Poisson integration; Fig. 2)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"run_dir": "--model", "out": "--out", "truth_dir": "--truth",
@@ -50,54 +50,19 @@ def heightmap_command(
         "--plot", help="Folder for one Fig. 2-style PNG per trial (the frame of largest "
         "height: image and 3-D height map).", metavar="FOLDER", show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Height maps (mm) of every frame: the MLP's surface normals per pixel, gradients by
     eq. 9 and a DST Poisson solve; written as a new tactile HDF5 file (stream height_mm
     per trial, the model run in its provenance). With --truth, the height RMSE."""
 
-    def body() -> None:
-        from ..store.outdir import check_output_folder, output_folder
-        from ..store.provenance import current_command
-        from ..visuotactile.heightmap import heightmap_file
+    from ..visuotactile.heightmap import heightmap_file
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        if truth is not None and not truth.is_dir():
-            raise InputError("truth folder not found (give a scene's truth/ folder)",
-                             path=truth)
-        if plot is not None:
-            check_output_folder(plot, merge=True)
-        keep: dict | None = {} if plot is not None else None
+    def body():
         with RichProgress(enabled=progress) as bar:
-            result = heightmap_file(file, model, out, truth_dir=truth, px_per_mm=px_per_mm,
-                                    skip_below=skip_below, workers=workers, trials=trial,
-                                    overwrite=overwrite, command=current_command(),
-                                    progress=bar, keep=keep)
-        if plot is not None and keep is not None:
-            from ..store.trials import TactileFile
-            from ..visuotactile.heightmap import load_truth
-            from ..visuotactile.plots import height_figure
+            return heightmap_file(file, model, out, truth_dir=truth, px_per_mm=px_per_mm,
+                                  skip_below=skip_below, workers=workers, trials=trial,
+                                  overwrite=overwrite, progress=bar, plot=plot)
 
-            with TactileFile(file) as tf, output_folder(plot, merge=True) as tmp:
-                for name, heights in keep.items():
-                    k = int(heights.reshape(len(heights), -1).max(axis=1).argmax())
-                    true = (load_truth(truth, name, heights.shape)[k] if truth is not None
-                            else None)
-                    height_figure(tf.trial(name).frames()[k], heights[k], result.px_per_mm,
-                                  tmp / f"height_{name}.png", truth_mm=true,
-                                  title=f"{name}, frame {k}")
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-            return
-        typer.echo(f"wrote {out}: {sum(t.n_frames for t in result.trials)} height maps of "
-                   f"{len(result.trials)} trial(s), {result.ms_per_frame:.1f} ms per frame "
-                   f"(reading and writing included), px_per_mm {result.px_per_mm:g}")
-        if result.rmse_mm is not None:
-            typer.echo(f"height RMSE vs truth: {result.rmse_mm:.4f} mm over all pixels, "
-                       f"{result.rmse_contact_mm:.4f} mm over contact pixels")
-        if plot is not None:
-            typer.echo(f"wrote {plot}/height_*.png")
-
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -3,45 +3,30 @@
 
 from __future__ import annotations
 
-import json
-import math
-from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "model_run": "--model", "mesh": "--mesh",
                           "hold_s": "--hold-s", "motion_s": "--motion-s",
                           "threshold": "--threshold", "n_static": "--n-static",
-                          "trials": "--trial"}
+                          "trials": "--trial", "plot": "--plot"}
 
 
-def _ingested(folder: Path, tmp: Path) -> Path:
-    """A folder of frames as a temporary tactile HDF5 file: a scene folder (``trials/``
-    beside ``scene.json``) with its trial labels, annotations and ``px_per_mm``; any other
-    folder as image-sequence folders without labels."""
+def _ingest_frames(inputs: Path, out: Path, options: dict[str, Any]) -> Path:
+    """Image-sequence folders into a tactile file, as `tactile ingest` would (``options``:
+    the format's options plus ``trial_labels`` and ``annotations``)."""
     from ..ingest import ingest
 
-    scene = folder / "scene.json"
-    if not ((folder / "trials").is_dir() and scene.is_file()):
-        return ingest([folder], tmp / "frames.h5", format="images")
-    try:
-        px = float(json.loads(scene.read_text(encoding="utf-8"))["optics"]["px_per_mm"])
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"cannot read optics.px_per_mm ({exc})", path=scene) from None
-    if not (math.isfinite(px) and px > 0):
-        raise InputError(f"optics.px_per_mm is {px}; expected a positive number of "
-                         "pixels per mm", path=scene)
-    labels, notes = folder / "trial_labels.csv", folder / "annotations.csv"
-    return ingest([folder / "trials"], tmp / "frames.h5", format="images",
-                  options={"px_per_mm": px},
-                  trial_labels=labels if labels.is_file() else None,
-                  annotations=notes if notes.is_file() else None)
+    opts = dict(options)
+    return ingest([inputs], out, format="images", trial_labels=opts.pop("trial_labels", None),
+                  annotations=opts.pop("annotations", None), options=opts)
 
 
 def monitor_command(
@@ -80,7 +65,7 @@ def monitor_command(
     overwrite: Annotated[bool, typer.Option(
         help="Empty the --plot folder first (default: add the PNGs to it, replacing "
         "same-named ones).")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Replay each trial's frames through the monitor: slip signal on the tactile mesh,
@@ -91,57 +76,14 @@ def monitor_command(
     missed and false and the detection delay. A folder of frames is first ingested into a
     temporary file (as tactile ingest would), then replayed the same way."""
 
-    def body() -> None:
-        from ..visuotactile.monitor_replay import monitor_file, parse_mesh, plot_trial
+    from ..visuotactile.monitor_replay import monitor_input
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        if plot is not None:  # before the replay, which can take minutes
-            from ..store.outdir import check_output_folder
+    def body():
+        with RichProgress(enabled=progress) as bar:
+            return monitor_input(file, ingest_frames=_ingest_frames, plot=plot,
+                                 overwrite=overwrite, source=source, model_run=model,
+                                 mesh=mesh, hold_s=hold_s, motion_s=motion_s,
+                                 threshold=threshold, n_static=n_static, trials=trial,
+                                 progress=bar)
 
-            check_output_folder(plot, overwrite=overwrite, merge=not overwrite)
-        import tempfile
-
-        with tempfile.TemporaryDirectory(prefix="tactile-monitor-") as tmp, \
-                RichProgress(enabled=progress) as bar:
-            data = _ingested(file, Path(tmp)) if file.is_dir() else file
-            result = monitor_file(data, source=source, model_run=model,
-                                  mesh=parse_mesh(mesh), hold_s=hold_s, motion_s=motion_s,
-                                  threshold=threshold, n_static=n_static, trials=trial,
-                                  progress=bar)
-            result = replace(result, file=str(file))
-        if plot is not None:
-            from ..store.outdir import output_folder
-
-            with output_folder(plot, overwrite=overwrite, merge=not overwrite) as tmp:
-                for t in result.trials:
-                    plot_trial(t, tmp / f"{t.trial}.png")
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2))
-            return
-        for t in result.trials:
-            typer.echo(f"{t.trial}: threshold {t.threshold:.6g} (monitor from frame "
-                       f"{t.start_frame}; gripper motion from {t.motion_from})")
-            for e in t.events:
-                if e.kind in ("slip", "no_slip", "raise_grip", "release_grip"):
-                    typer.echo(f"  {e.t_s:8.3f} s  frame {e.frame:5d}  {e.kind:<12} {e.detail}")
-            ignored = sum(1 for e in t.events if e.kind == "ignored_moving")
-            restarts = sum(1 for e in t.events if e.kind == "timer_restart")
-            line = f"  {restarts} timer restarts, {ignored} frames above threshold ignored " \
-                   "while the gripper moved"
-            if t.score is not None:
-                s = t.score
-                delay = (f", mean delay {1e3 * sum(s.delays_s) / len(s.delays_s):.0f} ms"
-                         if s.delays_s else "")
-                line += (f"; truth: {s.caught}/{s.n_interferences} caught, {s.missed} "
-                         f"missed, {s.false_slips} false slips{delay}")
-            typer.echo(line)
-        tot = result.totals()
-        if tot["trials_scored"]:
-            rate = tot["detection_rate"]
-            typer.echo(f"all: {tot['caught']}/{tot['interferences']} interferences caught"
-                       + (f" ({100 * rate:.0f} %)" if rate is not None else "")
-                       + f", {tot['false_slips']} false slips, {tot['raise_grip']} raise and "
-                       f"{tot['release_grip']} release commands")
-
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -3,13 +3,14 @@ of the normal MLP from ball-bearing presses (paper 002, sec. II-B)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {
@@ -44,7 +45,7 @@ def normal_labels_command(
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (and "
                                             "--plot folder).")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Find the ball's contact circle in every calibration press (colour difference from the
@@ -53,37 +54,12 @@ def normal_labels_command(
     (stream `pixels`, one trial per press) for `tactile train configs/train_mlp_normals.yaml`.
     Prints per press the circle and, for simulated presses, its error against the truth."""
 
-    def body() -> None:
-        from ..visuotactile.calibrate import write_normal_labels
+    from ..visuotactile.calibrate import write_normal_labels
 
+    def body():
         with RichProgress(enabled=progress) as bar:
-            result = write_normal_labels(calibration, out, flat_per_press=flat_per_press,
-                                         seed=seed, overwrite=overwrite, progress=bar,
-                                         plot_dir=plot)
-        summary = result.as_dict()
-        if as_json:
-            typer.echo(json.dumps(summary, indent=2))
-            return
-        for row in summary["presses"]:
-            err = ("" if row["centre_error_px"] is None else
-                   f"  error: centre {row['centre_error_px']:.2f} px, radius "
-                   f"{row['radius_error_px']:+.2f} px")
-            if row["status"] != "ok":
-                typer.echo(f"{row['trial']}: not labelled: {row['status']}")
-                continue
-            typer.echo(f"{row['trial']}: circle ({row['centre_x_px']:.1f}, "
-                       f"{row['centre_y_px']:.1f}) r {row['radius_px']:.1f} px, "
-                       f"{row['n_contact']} contact + {row['n_flat']} flat px{err}")
-        typer.echo(f"wrote {summary['out']}: {summary['n_pixels']:,} pixels from "
-                   f"{summary['n_labelled']} of {summary['n_presses']} presses "
-                   f"({summary['n_contact_pixels']:,} in contact; {summary['n_flat_left_out']:,}"
-                   f" flat pixels left out, --flat-per-press {summary['flat_per_press']}); "
-                   f"px_per_mm {summary['px_per_mm']:g}")
-        for key in ("centre_error_px", "radius_error_px"):
-            stats = summary[key]
-            if stats is not None:
-                typer.echo(f"circle {key.replace('_px', '').replace('_', ' ')} against the "
-                           f"scene truth: median {stats['median']:.2f} px, max "
-                           f"{stats['max']:.2f} px (n={stats['n']})")
+            return write_normal_labels(calibration, out, flat_per_press=flat_per_press,
+                                       seed=seed, overwrite=overwrite, progress=bar,
+                                       plot_dir=plot)
 
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -1,15 +1,16 @@
 """`tactile simulate digit-avoidance OUT --seed N`: the closed-loop slip-avoidance scene of
-paper 002, sec. V (registered on the `simulate` sub-app in ``cli/simulate.py``)."""
+paper 002, sec. V (registered on the `simulate` sub-app in ``cli/__init__.py``)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption, OverwriteOption, SceneConfigOption, SeedOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"seed": "--seed", "objects": "--object",
@@ -19,19 +20,16 @@ FLAGS: dict[str, Flag] = {"seed": "--seed", "objects": "--object",
 def digit_avoidance_command(
     out: Annotated[Path, typer.Argument(help="Output folder (created).", metavar="FOLDER",
                                         show_default=False)],
-    config: Annotated[Path | None, typer.Option(
-        "--config", "-c", help="Scene config YAML (see configs/scene_digit_avoidance.yaml); "
-        "default: the built-in defaults, which that file repeats.", metavar="CONFIG")] = None,
-    seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte.")] = 0,
+    config: SceneConfigOption = None,
+    seed: SeedOption = 0,
     obj: Annotated[list[str] | None, typer.Option(
         "--object", help="Simulate this object (cable, box, fabric, hex_key_small, "
         "hex_key_medium, hex_key_large); repeatable, one trial each. Default: the config's.",
         metavar="NAME")] = None,
     interferences: Annotated[int | None, typer.Option(
         "--interferences", min=1, help="Override interferences (pushes per trial).")] = None,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing non-empty output folder.")
-                         ] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    overwrite: OverwriteOption = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Simulate slip avoidance in a closed loop (Figs. 13-14): an object held on a DIGIT-like
@@ -49,40 +47,17 @@ def digit_avoidance_command(
     FOLDER/annotations.csv --px-per-mm 16 --out avoid.h5; tactile monitor avoid.h5 (or
     tactile monitor FOLDER, which ingests the folder itself)
     """
+    from ..visuotactile.avoidance import (
+        AvoidanceConfig,
+        load_avoidance_config,
+        simulate_digit_avoidance,
+    )
 
-    def body() -> None:
-        from ..errors import InputError
-        from ..visuotactile.avoidance import (
-            AvoidanceConfig,
-            load_avoidance_config,
-            simulate_digit_avoidance,
-        )
-        from ..visuotactile.shapes import OBJECT_NAMES
-
-        unknown = [o for o in obj or [] if o not in OBJECT_NAMES]
-        if unknown:
-            raise InputError(f"--object {unknown[0]!r} is not one of {', '.join(OBJECT_NAMES)}")
+    def body():
         cfg = load_avoidance_config(config) if config is not None else AvoidanceConfig()
-        if obj or interferences is not None:
-            from pydantic import ValidationError
-
-            try:
-                cfg = cfg.with_overrides(objects=obj or None, interferences=interferences)
-            except ValidationError as exc:
-                first = exc.errors()[0]
-                where = ".".join(str(p) for p in first["loc"])
-                raise InputError(f"{where}: {first['msg']}") from None
+        cfg = cfg.with_overrides(objects=obj or None, interferences=interferences)
         with RichProgress(enabled=progress) as bar:
-            result = simulate_digit_avoidance(cfg, out, seed=seed, progress=bar,
-                                              overwrite=overwrite)
-        summary = result.as_dict()
-        if as_json:
-            typer.echo(json.dumps(summary, indent=2))
-            return
-        typer.echo(f"digit-avoidance -> {result.out_dir} (seed {result.seed}): "
-                   f"{summary['n_trials']} trials, {summary['n_frames']} frames, "
-                   f"{summary['n_interferences']} interferences; live monitor: "
-                   f"{summary['n_raise_grip']} raise and {summary['n_release_grip']} release "
-                   f"commands; simulated in {summary['elapsed_s']:.1f} s")
+            return simulate_digit_avoidance(cfg, out, seed=seed, progress=bar,
+                                            overwrite=overwrite)
 
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

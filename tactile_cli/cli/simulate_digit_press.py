@@ -1,9 +1,8 @@
 """`tactile simulate digit-press OUT`: the DIGIT-like scene of paper 002 (registered in
-``cli/simulate.py``)."""
+``cli/__init__.py``)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -11,9 +10,13 @@ import typer
 
 from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption, OverwriteOption, SceneConfigOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite"}
+FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite",
+                          "presses": "--calibration-presses", "per_object": "--trials",
+                          "objects": "--objects"}
 
 
 def digit_press_command(
@@ -25,12 +28,7 @@ def digit_press_command(
         Path | None, typer.Option("--out", "-o", help="Output folder (same as OUT).",
                                   metavar="FOLDER", show_default=False)
     ] = None,
-    config: Annotated[
-        Path | None,
-        typer.Option("--config", "-c", help="Scene config YAML; default: the built-in "
-                     "defaults, which configs/scene_digit_press.yaml repeats.",
-                     metavar="CONFIG"),
-    ] = None,
+    config: SceneConfigOption = None,
     seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte "
                                       "and this unit's lighting.")] = 0,
     calibration_presses: Annotated[
@@ -47,10 +45,8 @@ def digit_press_command(
                                  "(cable, box, fabric, hex_key_small, hex_key_medium, "
                                  "hex_key_large).", metavar="NAMES")
     ] = None,
-    overwrite: Annotated[
-        bool, typer.Option(help="Replace an existing non-empty output folder.")
-    ] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    overwrite: OverwriteOption = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Simulate paper 002's DIGIT: ball-bearing calibration presses and objects (cable, box
@@ -68,47 +64,19 @@ def digit_press_command(
     then tactile normal-labels calib.h5 --out pixels.h5.
     """
 
-    def body() -> None:
-        from ..visuotactile.config import SceneConfig, load_scene_config
-        from ..visuotactile.simulate import simulate_digit_press
+    from ..visuotactile.config import DigitSceneConfig, load_digit_scene_config
+    from ..visuotactile.simulate import simulate_digit_press
 
+    def body():
         if (out_arg is None) == (out is None):
             raise InputError("give the output folder once: OUT or --out"
                              + (", not both" if out_arg is not None else ""))
-        target = out_arg if out_arg is not None else out
-        assert target is not None
-        cfg = load_scene_config(config) if config is not None else SceneConfig()
-        if calibration_presses is not None or trials is not None or objects is not None:
-            names = None if objects is None else [s.strip() for s in objects.split(",")
-                                                  if s.strip()]
-            if names is not None:
-                from ..visuotactile.shapes import OBJECT_NAMES
-
-                unknown = [n for n in names if n not in OBJECT_NAMES]
-                if unknown or not names:
-                    raise InputError(f"--objects {objects!r}: "
-                                     + (f"{unknown[0]!r} is not" if unknown else "name")
-                                     + f" one of {', '.join(OBJECT_NAMES)}")
-            try:
-                cfg = cfg.with_overrides(presses=calibration_presses, per_object=trials,
-                                         objects=names)
-            except ValueError as exc:
-                lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-                raise InputError(f"--objects/--trials/--calibration-presses: "
-                                 f"{lines[1] if len(lines) > 1 else lines[0]}"
-                                 + (f" ({lines[2]})" if len(lines) > 2 else "")) from None
+        cfg = load_digit_scene_config(config) if config is not None else DigitSceneConfig()
+        cfg = cfg.with_overrides(presses=calibration_presses, per_object=trials, objects=None
+                                 if objects is None else [s.strip() for s in objects.split(",")
+                                                          if s.strip()])
         with RichProgress(enabled=progress) as bar:
-            result = simulate_digit_press(cfg, target, seed=seed, progress=bar,
-                                          overwrite=overwrite)
-        summary = result.as_dict()
-        if as_json:
-            typer.echo(json.dumps(summary, indent=2))
-            return
-        typer.echo(f"digit-press -> {result.out_dir} (seed {result.seed}): "
-                   f"{summary['n_calibration_presses']} calibration presses, "
-                   f"{summary['n_trials']} trials ({summary['n_slip']} slipping), "
-                   f"{summary['n_frames']} frames, simulated in {summary['elapsed_s']:.1f} s")
-        for line in summary["ingest"]:
-            typer.echo(f"  then: {line}")
+            return simulate_digit_press(cfg, out_arg or out, seed=seed, progress=bar,
+                                        overwrite=overwrite)
 
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -2,17 +2,18 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"folds": "--folds"}
+FLAGS: dict[str, Flag] = {"folds": "--folds", "out": "--out", "plot": "--plot",
+                          "config": "--config"}
 
 
 def slip_interface_command(
@@ -32,7 +33,7 @@ def slip_interface_command(
                                               "as a PNG (like Fig. 12).", metavar="FILE")
                     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Classify the slip interface (object/hand or object/world) of every trial with a
@@ -41,51 +42,11 @@ def slip_interface_command(
     (f, w) chosen inside each training set by an inner cross-validation (nested, the
     headline; the optimistic best band chosen on all trials is reported beside it).
     Contact estimation and the noise-floor gate apply first."""
+    from ..taxel import slip_interface_file
 
-    def body() -> None:
-        from ..store.atomic import atomic_file, write_text
-        from ..store.provenance import provenance_record
-        from ..taxel import FeatureConfig, load_feature_config, slip_interface
-
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        for target in (out, plot):
-            if target is not None and target.exists() and not overwrite:
-                raise InputError("output exists; pass --overwrite to replace it", path=target)
-        cfg = load_feature_config(config) if config is not None else FeatureConfig()
-        if folds is not None:
-            cfg = cfg.model_copy(update={"folds": folds})
+    def body():
         with RichProgress(enabled=progress) as bar:
-            result = slip_interface(file, cfg, progress=bar)
-        summary = result.as_dict()
-        record = provenance_record([file] + ([config] if config else []),
-                                   cfg.model_dump(mode="json"))
-        if out is not None:
-            text = json.dumps({**summary, "provenance": record}, indent=2)
-            write_text(out, text + "\n", overwrite=overwrite)
-        if plot is not None:
-            from ..taxel.plots import plot_feature_spectra
+            return slip_interface_file(file, config=config, folds=folds, out=out, plot=plot,
+                                       overwrite=overwrite, progress=bar)
 
-            with atomic_file(plot, overwrite=overwrite, keep_suffix=True) as tmp:
-                plot_feature_spectra(result.features, tmp)
-        if as_json:
-            typer.echo(json.dumps(summary, indent=2))
-            return
-        from rich.console import Console
-        from rich.table import Table
-
-        table = Table(title=f"slip interface, {result.folds}-fold CV per trial "
-                      f"({', '.join(result.datasets)})")
-        for col in ("preset", "feature", "trials", "decided", "full spectrum",
-                    "best band (nested)", "best band (optimistic)", "(f, w) Hz"):
-            table.add_column(col, justify="right")
-        for s in result.scores:
-            f, w = s.optimistic_band_hz
-            table.add_row(s.preset, s.feature, str(s.n_trials), str(s.n_decided),
-                          f"{100 * s.full_spectrum:.1f} %", f"{100 * s.nested_best_band:.1f} %",
-                          f"{100 * s.optimistic_best_band:.1f} %", f"({f:.4g}, {w:.4g})")
-        Console(width=130).print(table)
-        typer.echo(f"nested best band >= 85 %: {summary['nested_at_least_85']} of "
-                   f"{summary['n_combinations']} preset x feature combinations")
-
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json, width=130)

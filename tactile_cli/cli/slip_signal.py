@@ -3,20 +3,20 @@ threshold and the slip decision per trial (paper 002, secs. III-V; Figs. 5, 7, 1
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from ..errors import InputError
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {"source": "--source", "run_dir": "--model", "mesh": "--mesh",
                           "scale": "--scale", "n_static": "--n-static", "trials": "--trial",
-                          "px_per_mm": "--px-per-mm", "workers": "--workers"}
+                          "px_per_mm": "--px-per-mm", "workers": "--workers", "plot": "--plot"}
 
 
 def slip_signal_command(
@@ -51,8 +51,7 @@ def slip_signal_command(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Folder for one PNG per trial and source: S over time with the "
         "threshold, onset and detection.", metavar="FOLDER", show_default=False)] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON (per "
-                                          "trial the signal too).")] = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Slip signal S = sum |h_t - h_(t-1)| over a tactile mesh (eq. 10), adaptive threshold
@@ -61,74 +60,15 @@ def slip_signal_command(
     before the labelled slip_onset_s, or on a no_slip trial) and the threshold scale that
     separates them best."""
 
-    def body() -> None:
-        from ..visuotactile.mesh import parse_mesh
-        from ..visuotactile.slip import slip_signal_file
+    from ..visuotactile.monitor_replay import parse_mesh
+    from ..visuotactile.slip import slip_signal_file
 
-        if not file.exists():
-            raise InputError("file not found", path=file)
-        try:
-            cells = parse_mesh(mesh)
-        except ValueError as exc:
-            raise InputError(str(exc)) from None
-        if plot is not None:
-            from ..store.outdir import check_output_folder
-
-            check_output_folder(plot, merge=True)
+    def body():
         with RichProgress(enabled=progress) as bar:
-            result = slip_signal_file(file, source=source, run_dir=model, mesh=cells,
-                                      scale=scale, n_static=n_static, trials=trial,
-                                      px_per_mm=px_per_mm, workers=workers, progress=bar)
-        if plot is not None:
-            from ..store.outdir import output_folder
-            from ..visuotactile.plots import slip_signal_figure
+            return slip_signal_file(file, source=source, run_dir=model, mesh=parse_mesh(mesh),
+                                    scale=scale, n_static=n_static, trials=trial,
+                                    px_per_mm=px_per_mm, workers=workers, progress=bar,
+                                    plot=plot)
 
-            with output_folder(plot, merge=True) as tmp:
-                for r in result.trials:
-                    d = r.detection
-                    slip_signal_figure(
-                        d.t_s, d.signal, d.threshold, tmp / f"slip_{r.trial}_{r.source}.png",
-                        onset_s=r.onset_s, detected_s=d.first_time_s,
-                        first_judged_s=float(d.t_s[min(d.first_judged, d.t_s.size - 1)]),
-                        unit="mm" if r.source == "height" else "colour units",
-                        title=f"{r.trial} ({r.object or '-'}, {r.source}, mesh {mesh})")
-        if as_json:
-            typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
-            return
-        from rich.console import Console
-        from rich.table import Table
-
-        console = Console(width=None if sys.stdout.isatty() else 160)
-        table = Table(title=f"Slip signal of {file} (mesh {mesh}, threshold {scale:g} x mean "
-                      f"of {n_static} static signals)")
-        for col in ("trial", "object", "source", "label", "onset (s)", "threshold",
-                    "detected at (s)", "peak/static", "result"):
-            table.add_column(col)
-        for r in result.trials:
-            d = r.detection
-            verdict = "-"
-            if r.score is not None:
-                verdict = ("false alarm" if r.score.false_alarm else
-                           "hit" if r.score.detected else
-                           "missed" if r.slip else "correct reject")
-                if r.score.false_alarm and r.score.detected:
-                    verdict = "hit + false alarm"
-            table.add_row(r.trial, r.object or "-", r.source,
-                          "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
-                          "-" if r.onset_s is None else f"{r.onset_s:.3f}",
-                          f"{d.threshold:.4g}",
-                          "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
-                          f"{d.peak_ratio():.1f}", verdict)
-        console.print(table)
-        for src, rates in result.rates.items():
-            best = result.best[src]
-            console.print(f"{src}: detection rate {rates.detection_rate:.2f} over "
-                          f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
-                          f"{rates.n_slip + rates.n_no_slip} trials; best scale "
-                          f"{best.scale:g} (as good: {best.best_from:g}-{best.best_to:g}; "
-                          f"detection {best.rates.detection_rate:.2f}, false alarms "
-                          f"{best.rates.false_alarms})")
-        if plot is not None:
-            console.print(f"wrote {plot}/slip_*.png")
-
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(body, flags=FLAGS), as_json=as_json,
+                 width=None if sys.stdout.isatty() else 160)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption
+from ._output import print_result
 
 FLAGS: dict[str, Flag] = {"plot": "--plot"}
 
@@ -21,7 +22,7 @@ def vibro_model_command(
                                               "(like paper 003, Fig. 3A).", metavar="FILE")
                     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --plot file.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Solve the lumped model of paper 003 (sec. 2.2) from 1 to 1000 Hz: the
     accelerometer's displacement per unit motor displacement without contact and with the
@@ -31,42 +32,7 @@ def vibro_model_command(
     JSON keys: resonances_free, resonances_contact (f_hz, amplitude), natural_free_hz,
     natural_contact_hz, f_range_hz, config, plot.
     """
+    from ..vibro.pipeline import model_file
 
-    def body() -> None:
-        from ..errors import InputError
-        from ..vibro import load_model_config, model_spectra
-
-        cfg = load_model_config(config)
-        if plot is not None:
-            if plot.exists() and not overwrite:
-                raise InputError("output exists; pass `plot` elsewhere or `overwrite=True`",
-                                 path=plot)
-            if not plot.parent.is_dir():
-                raise InputError("output folder does not exist", path=plot.parent)
-        spectra = model_spectra(cfg)
-        out = spectra.as_dict()
-        out["config"] = str(config)
-        if plot is not None:
-            from ..vibro.plots import plot_model_spectra
-            from ._vibro_meta import png_meta
-
-            plot_model_spectra(spectra, plot,
-                               meta=png_meta([config], cfg.model_dump(mode="json")))
-        out["plot"] = None if plot is None else str(plot)
-        if as_json:
-            typer.echo(json.dumps(out, indent=2))
-            return
-        typer.echo(f"lumped model {config}: {len(cfg.blocks)} blocks, "
-                   f"{len(cfg.contact)} contact links; |x_{cfg.sensor} / u_{cfg.source}| over "
-                   f"{cfg.f_min_hz:g}-{cfg.f_max_hz:g} Hz")
-        for key, title in (("resonances_free", "no contact"), ("resonances_contact", "contact")):
-            peaks = ", ".join(f"{r['f_hz']:.1f} Hz ({r['amplitude']:.3g})" for r in out[key])
-            typer.echo(f"  {title:>10}: {peaks or 'no resonance'}")
-        typer.echo("  natural frequencies (Hz), no contact: "
-                   + ", ".join(f"{v:.1f}" for v in out["natural_free_hz"]))
-        typer.echo("  natural frequencies (Hz),    contact: "
-                   + ", ".join(f"{v:.1f}" for v in out["natural_contact_hz"]))
-        if plot is not None:
-            typer.echo(f"  spectra -> {plot}")
-
-    run_guarded(body, flags=FLAGS)
+    print_result(run_guarded(lambda: model_file(config, plot=plot, overwrite=overwrite),
+                             flags=FLAGS), as_json=as_json)

@@ -34,6 +34,7 @@ from ._coherence import segment_spectra as segment_spectra
 from ._coherence import welch_segment_count as welch_segment_count
 from ._resample import bandwidth_steps as bandwidth_steps
 from ._resample import limit_bandwidth as limit_bandwidth
+from ._resample import lowest_cutoff_hz as lowest_cutoff_hz
 from ._stft import STFT_LENGTHS as STFT_LENGTHS
 from ._stft import spectrogram as spectrogram
 from ._stft import stft_hop as stft_hop
@@ -47,8 +48,8 @@ from ._tracking import frame_spectra as frame_spectra
 
 __all__ = ["STFT_LENGTHS", "FrameSettings", "FrameSpectra", "SpectrumTracker", "band_peak",
            "frame_spectra", "causal_moving_average", "band_power", "bandwidth_steps",
-           "limit_bandwidth", "spectral_centroid", "spectrogram", "stft_hop", "stft_lengths",
-           "welch_psd"]
+           "limit_bandwidth", "lowest_cutoff_hz", "spectral_centroid", "spectrogram", "stft_hop",
+           "stft_lengths", "welch_psd"]
 __all__ += ["band_sums", "coherence_matrix", "cross_spectral_matrix", "g2_noise_floor",
             "group_square_coherence", "group_square_coherence_bins",
             "group_square_coherence_windows", "local_ensemble_power",

@@ -14,6 +14,15 @@ from fractions import Fraction
 import numpy as np
 from scipy import signal as _signal
 
+#: The resampling ratio ``2 x cut-off / rate`` is the nearest fraction with at most this
+#: denominator (:func:`limit_bandwidth`), so a cut-off below ``rate / (2 x this)`` has none.
+MAX_RATIO_DENOMINATOR = 1000
+
+
+def lowest_cutoff_hz(rate_hz: float) -> float:
+    """The lowest cut-off :func:`limit_bandwidth` takes for a stream of ``rate_hz``."""
+    return rate_hz / (2 * MAX_RATIO_DENOMINATOR)
+
 
 def bandwidth_steps(rate_hz: float, lowest_hz: float = 31.25) -> list[float]:
     """Cut-offs (Hz) from the Nyquist frequency ``rate_hz / 2`` halved down to
@@ -35,17 +44,21 @@ def limit_bandwidth(x: np.ndarray, rate_hz: float, cutoff_hz: float, *,
     returns the input unchanged."""
     a = np.asarray(x, dtype=np.float64)
     a = a[:, None] if a.ndim == 1 else a
-    if not cutoff_hz > 0:
+    if not (np.isfinite(cutoff_hz) and cutoff_hz > 0):
         raise ValueError(f"`cutoff_hz` (={cutoff_hz}) must be positive")
     nyquist = rate_hz / 2
     if cutoff_hz >= nyquist * (1 - 1e-9):
         return a.copy(), float(rate_hz)
+    if cutoff_hz < lowest_cutoff_hz(rate_hz):
+        raise ValueError(f"`cutoff_hz` (={cutoff_hz:g}) is below {lowest_cutoff_hz(rate_hz):g} "
+                         f"Hz, the lowest cut-off of a {rate_hz:g} Hz stream (its resampling "
+                         f"ratio 2 x cut-off / rate is at least 1/{MAX_RATIO_DENOMINATOR})")
     if a.shape[0] < 64:
         raise ValueError(f"`x` has {a.shape[0]} samples; the anti-alias filter needs >= 64")
     sos = _signal.butter(8, cutoff_hz / nyquist, btype="low", output="sos")
     y = _signal.sosfiltfilt(sos, a, axis=0)
     if not resample:
         return y, float(rate_hz)
-    ratio = Fraction(2 * cutoff_hz / rate_hz).limit_denominator(1000)
+    ratio = Fraction(2 * cutoff_hz / rate_hz).limit_denominator(MAX_RATIO_DENOMINATOR)
     y = _signal.resample_poly(y, ratio.numerator, ratio.denominator, axis=0)
     return y, float(rate_hz * ratio)

@@ -35,8 +35,10 @@ class FrameSettings:
                      n_fft: int | None = None) -> FrameSettings:
         """Settings from durations (rounded to whole samples); ``n_fft`` defaults to the
         next power of two at or above the window."""
-        if not rate_hz > 0:
+        if not (np.isfinite(rate_hz) and rate_hz > 0):
             raise ValueError(f"`rate_hz` (={rate_hz}) must be positive")
+        if not (np.isfinite(window_s) and np.isfinite(hop_s)):
+            raise ValueError(f"`window_s` (={window_s}) and `hop_s` (={hop_s}) must be finite")
         window = int(round(window_s * rate_hz))
         hop = int(round(hop_s * rate_hz))
         if window < 4:

@@ -11,7 +11,14 @@ in contact and sampled at the same instant); with two or more groups, G2 across 
 too (each group summed into one virtual channel). The input stream's per-sample labels are
 carried over at each window's last sample, so a classifier trained on the features learns
 the same targets. The taxel chain's own feature stream (contact estimation, slip labels
-from its annotations) is :func:`tactile_cli.taxel.write_feature_stream`.
+from its annotations) is :func:`tactile_cli.taxel.write_taxel_features`.
+
+Both write through the one feature-stream writer, :func:`write_feature_stream`: a chain
+computes each trial's windows (:class:`FeatureTrial`) and the writer makes the new file
+(trials with their labels, split and annotations, one sensor per :class:`FeatureSensor`,
+the provenance). :func:`window_plan` checks a window and hop against a stream's rate and
+length before any work: a hop below one sample, or windows whose arrays would not fit in
+memory, are refused with the estimate.
 
 Many files: :func:`stream_features_each`, one task per file on Dask
 (:func:`tactile_cli.batch.run_each`), each output written atomically by its worker.
@@ -20,8 +27,8 @@ Many files: :func:`stream_features_each`, one task per file on Dask
 from __future__ import annotations
 
 import fnmatch
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +37,7 @@ import numpy as np
 from ..batch import FileBatchResult, FileCounts, FileItem
 from ..errors import InputError
 from ..progress import NullProgress, Progress
-from ..store.trials import TactileFile
+from ..store.trials import TactileFile, Trial
 from ..store.writer import StoreWriter
 from ._array_features import array_features, finger_ensembles, multi_finger_g2
 
@@ -63,6 +70,13 @@ class StreamFeaturesResult:
                 "window_s": self.window_s, "hop_s": self.hop_s,
                 "rank_deficient_bands": list(self.rank_deficient),
                 "too_short": list(self.too_short)}
+
+    def summary_lines(self) -> list[str]:
+        return [f"wrote {self.out}: {self.n_trials} trial(s), {self.n_windows} windows of "
+                f"{self.window_s:g} s every {self.hop_s:g} s, {len(self.channels)} channels "
+                f"from {len(self.groups)} array(s) of {self.stream}"
+                + (f"; rank-deficient bands (G2 biased up): {', '.join(self.rank_deficient)}"
+                   if self.rank_deficient else "")]
 
 
 def channel_groups(names: Sequence[str], groups: Sequence[Sequence[str]] | None
@@ -109,6 +123,105 @@ def named_bins(f_hz: np.ndarray, bands_hz: Mapping[str, tuple[float, float]]
     return names + ["full"], np.array(lo + [1]), np.array(hi + [top])
 
 
+@dataclass(frozen=True)
+class FeatureSensor:
+    """A sensor of a feature stream: ``name``, ``channels`` (``<feature>_<band>``), its
+    ``kind``, ``sample_rate_hz`` (1 / hop) and further attributes (``description``,
+    window, hop, ...)."""
+
+    name: str
+    channels: tuple[str, ...]
+    kind: str
+    sample_rate_hz: float
+    attrs: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class FeatureTrial:
+    """One trial's feature windows: the source ``trial`` (its labels, split, annotations
+    and duration are copied), the ``sensor``, ``values`` (n_windows, n_channels) (NaN
+    written as 0), ``t_s`` (n_windows,) each window's time and per-window
+    ``sample_labels`` (name -> (values, classes or None))."""
+
+    trial: Trial
+    sensor: FeatureSensor
+    values: np.ndarray
+    t_s: np.ndarray
+    sample_labels: Mapping[str, tuple[np.ndarray, Sequence[str] | None]] = field(
+        default_factory=dict)
+
+
+@dataclass(frozen=True)
+class FeatureStreamWritten:
+    """What :func:`write_feature_stream` wrote: the file, trials and windows."""
+
+    out: Path
+    n_trials: int
+    n_windows: int
+
+
+def write_feature_stream(path: str | Path, out: str | Path,
+                         trials: Callable[[TactileFile], Iterable[FeatureTrial]], *,
+                         command: str | None = None, config: Mapping[str, Any] | None = None,
+                         overwrite: bool = False) -> FeatureStreamWritten:
+    """The one writer of feature streams: open ``path``, write each :class:`FeatureTrial`
+    that ``trials(file)`` yields as stream :data:`FEATURE_STREAM` of a new tactile file
+    ``out`` (one sensor per :class:`FeatureSensor` name; every trial of a sensor must give
+    its channels), with ``path`` as the source and ``config`` in the provenance. ``trials``
+    raises :class:`InputError` when nothing is left to write; nothing is written then."""
+    n_trials = n_windows = 0
+    sensors: dict[str, tuple[str, tuple[str, ...]]] = {}
+    with TactileFile(path) as tf, StoreWriter(out, command=command, config=dict(config or {}),
+                                              overwrite=overwrite) as w:
+        source = w.add_source(path)
+        for ft in trials(tf):
+            s, trial = ft.sensor, ft.trial
+            if s.name not in sensors:
+                sensors[s.name] = (w.add_sensor(
+                    s.name, kind=s.kind, sample_rate_hz=s.sample_rate_hz,
+                    channel_names=s.channels, channel_units="1", **s.attrs), s.channels)
+            elif sensors[s.name][1] != s.channels:
+                raise InputError(f"trial {trial.name!r} gives other feature channels than the "
+                                 f"first trial of {s.name!r} (another rate or channel set)",
+                                 path=tf.path)
+            tw = w.trial(trial.name, labels=trial.labels, split=trial.split, sources=[source],
+                         annotations=[(a.start_s, a.end_s, a.label) for a in trial.annotations],
+                         duration_s=trial.duration_s)
+            tw.write_signal(FEATURE_STREAM, sensor=sensors[s.name][0],
+                            data=np.nan_to_num(ft.values), t_s=ft.t_s,
+                            sample_labels=dict(ft.sample_labels))
+            n_trials += 1
+            n_windows += len(ft.t_s)
+        written = w.commit()
+    return FeatureStreamWritten(written, n_trials, n_windows)
+
+
+def window_plan(window_s: float, hop_s: float, rate_hz: float, n_samples: int,
+                n_channels: int, *, what: str, path: str | Path | None = None
+                ) -> tuple[int, int]:
+    """``(window, hop)`` in samples of windows ``window_s`` long every ``hop_s`` over a
+    stream of ``n_samples`` x ``n_channels`` at ``rate_hz`` (``what`` names it), checked
+    before any work: both positive and finite, the hop at least one sample, and the
+    windows' arrays (the windows, their Welch segments and spectra: about 5 x the windowed
+    samples in float64) within this machine's memory; one :class:`InputError` otherwise."""
+    from ..config_file import check_fits_in_memory
+
+    for name, value in (("window_s", window_s), ("hop_s", hop_s)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"`{name}` (={value}) must be a positive number of seconds")
+    win = int(round(window_s * rate_hz))
+    hop = int(round(hop_s * rate_hz))
+    if hop < 1:
+        raise InputError(f"`hop_s` (={hop_s:g}) is shorter than one sample of {what} "
+                         f"({1 / rate_hz:.3g} s); give a hop of one sample or more", path=path)
+    n_windows = 0 if n_samples < win else (n_samples - win) // hop + 1
+    check_fits_in_memory(5.0 * 8 * n_windows * win * max(1, n_channels),
+                         f"`hop_s` (={hop_s:g}) with `window_s` (={window_s:g})",
+                         f"for the {n_windows:,} windows of {what}", path=path, text=None,
+                         keys=())
+    return win, hop
+
+
 def write_stream_features(
     path: str | Path,
     out: str | Path,
@@ -131,30 +244,31 @@ def write_stream_features(
     Channels of the output: ``gamma_<band>`` and ``g2_<band>`` (the groups' mean), and
     ``g2_groups_<band>`` with two groups or more. ``nperseg``: Welch segment (samples, at
     most the window), ``noverlap`` default half. A trial whose stream is shorter than one
-    window is left out and named in the result (``too_short``); none left is an error."""
+    window is left out and named in the result (``too_short``); none left is an error.
+    ``out`` may not be ``path`` (refused before any work, with or without ``overwrite``)."""
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+
     progress = progress or NullProgress()
-    if not (window_s > 0 and hop_s > 0):
+    check_outputs({"out": out}, [path])
+    check_output_file(out, overwrite=overwrite)
+    if not (np.isfinite(window_s) and window_s > 0 and np.isfinite(hop_s) and hop_s > 0):
         raise InputError(f"`window_s` (={window_s}) and `hop_s` (={hop_s}) must be positive")
     bands = dict(bands_hz or {})
-    n_windows = 0
-    channels: tuple[str, ...] = ()
     flagged: set[str] = set()
     short: list[str] = []
-    used_groups: tuple[tuple[str, ...], ...] = ()
-    written_trials = 0
-    with TactileFile(path) as tf, StoreWriter(out, command=command, config=dict(config or {}),
-                                              overwrite=overwrite) as w:
-        source = w.add_source(path)
+    first: dict[str, Any] = {}  # channels and groups of the first trial written
+
+    def windows_of(tf: TactileFile) -> Iterable[FeatureTrial]:
         trials = [t for t in tf.trials() if t.has_signal(stream)]
         if not trials:
             raise InputError(f"no trial has a stream {stream!r}", path=tf.path)
         progress.start(len(trials), "spectral features")
-        sensor = None
         for trial in trials:
             sig = trial.signal(stream)
             rate = 1.0 / sig.sample_period_s
-            win = int(round(window_s * rate))
-            hop = max(1, int(round(hop_s * rate)))
+            win, hop = window_plan(window_s, hop_s, rate, len(sig.data),
+                                   len(sig.channel_names), what=repr(stream), path=tf.path)
             seg = min(int(nperseg), win)
             if seg < 8:
                 raise InputError(f"`window_s` (={window_s}) holds {win} samples of {stream!r} "
@@ -183,42 +297,34 @@ def write_stream_features(
                 names.append("g2_groups")
             n_seg = (win - overlap) // (seg - overlap)
             smallest = min(len(g) for g in idx_groups)
-            flagged |= {b for b, a in zip(band_names, n_seg * (hi - lo + 1), strict=True)
-                        if a < smallest}
+            flagged.update(b for b, a in zip(band_names, n_seg * (hi - lo + 1), strict=True)
+                           if a < smallest)
             these = tuple(f"{feat}_{b}" for feat in names for b in band_names)
-            if sensor is None:
-                channels = these
-                used_groups = tuple(tuple(sig.channel_names[i] for i in g) for g in idx_groups)
-                sensor = w.add_sensor(
-                    f"{stream}_spectral", kind=sig.sensor.kind, sample_rate_hz=1.0 / hop_s,
-                    channel_names=channels, channel_units="1", input_stream=stream,
-                    window_s=window_s, hop_s=hop_s, nperseg=seg, noverlap=overlap,
-                    groups=";".join(",".join(g) for g in used_groups),
-                    description="power ratio Gamma and group square coherence G2 per "
-                    f"window and band of stream {stream} (paper 004)")
-            elif these != channels:
-                raise InputError(f"trial {trial.name!r}: stream {stream!r} gives other "
-                                 "feature channels than the first trial (another rate or "
-                                 "channel set)", path=tf.path)
+            first.setdefault("channels", these)
+            first.setdefault("groups", tuple(tuple(sig.channel_names[i] for i in g)
+                                             for g in idx_groups))
+            sensor = FeatureSensor(
+                f"{stream}_spectral", these, sig.sensor.kind, 1.0 / hop_s, {
+                    "input_stream": stream, "window_s": window_s, "hop_s": hop_s,
+                    "nperseg": seg, "noverlap": overlap,
+                    "groups": ";".join(",".join(g) for g in first["groups"]),
+                    "description": "power ratio Gamma and group square coherence G2 per "
+                    f"window and band of stream {stream} (paper 004)"})
             labels = {name: (lab.values[ends - 1], lab.classes)
                       for name, lab in sig.sample_labels.items()}
-            tw = w.trial(trial.name, labels=trial.labels, split=trial.split, sources=[source],
-                         annotations=[(a.start_s, a.end_s, a.label) for a in trial.annotations],
-                         duration_s=trial.duration_s)
-            tw.write_signal(FEATURE_STREAM, sensor=sensor,
-                            data=np.nan_to_num(np.concatenate(values, axis=1)),
-                            t_s=sig.t_s[ends - 1], sample_labels=labels)
-            n_windows += len(ends)
-            written_trials += 1
+            yield FeatureTrial(trial, sensor, np.concatenate(values, axis=1),
+                               sig.t_s[ends - 1], labels)
             progress.advance(1)
         progress.finish()
-        if not written_trials:
+        if len(short) == len(trials):
             raise InputError(f"every trial's {stream!r} is shorter than one window "
                              f"({window_s:g} s): {', '.join(short[:5])}", path=tf.path)
-        written = w.commit()
-    return StreamFeaturesResult(written, stream, written_trials, n_windows, channels,
-                                used_groups, window_s, hop_s, tuple(sorted(flagged)),
-                                tuple(short))
+
+    written = write_feature_stream(path, out, windows_of, command=command, config=config,
+                                   overwrite=overwrite)
+    return StreamFeaturesResult(written.out, stream, written.n_trials, written.n_windows,
+                                first["channels"], first["groups"], window_s, hop_s,
+                                tuple(sorted(flagged)), tuple(short))
 
 
 def stream_features_task(spec: dict[str, Any]) -> dict[str, Any]:
@@ -253,11 +359,15 @@ def stream_features_each(
     of :func:`write_stream_features` (``stream``, ``window_s``, ...). Outputs newer than
     their input are skipped unless ``overwrite``; a failed file never stops the others.
     Refused before any work: a missing input, two inputs of one stem, an output that is a
-    folder."""
+    folder or an input, a folder that cannot be written."""
     from ..batch import plan_outputs, run_each
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder
     from ..store.provenance import current_command
 
     items = plan_outputs(inputs, out_dir, overwrite=overwrite)
+    check_outputs([item.output for item in items], inputs)
+    check_output_folder(out_dir, merge=True)
     out = Path(out_dir)
     if on_plan is not None:
         on_plan(items)
@@ -271,5 +381,7 @@ def stream_features_each(
                     workers=workers, on_progress=on_progress, on_item=on_item)
 
 
-__all__ = ["FEATURE_STREAM", "StreamFeaturesResult", "channel_groups", "named_bins",
-           "stream_features_each", "stream_features_task", "write_stream_features"]
+__all__ = ["FEATURE_STREAM", "FeatureSensor", "FeatureStreamWritten", "FeatureTrial",
+           "StreamFeaturesResult", "channel_groups", "named_bins", "stream_features_each",
+           "stream_features_task", "window_plan", "write_feature_stream",
+           "write_stream_features"]

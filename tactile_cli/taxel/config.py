@@ -132,7 +132,7 @@ def default_textures() -> dict[str, TextureConfig]:
             roughness=0.45)}
 
 
-class SceneConfig(_Model):
+class TaxelSceneConfig(_Model):
     """``tactile simulate taxel-slip`` (``configs/scene_taxel_slip.yaml``)."""
 
     presets: tuple[Literal["biotac", "capacitive", "pvdf"], ...] = PRESET_NAMES
@@ -159,13 +159,23 @@ class SceneConfig(_Model):
     textures: dict[str, TextureConfig] = Field(default_factory=default_textures)
 
     @model_validator(mode="after")
-    def _check(self) -> SceneConfig:
+    def _check(self) -> TaxelSceneConfig:
         missing = [p for p in self.presets if p not in self.preset]
         if missing:
             raise ValueError(f"presets {missing} have no entry under preset")
         if not self.textures:
             raise ValueError("textures must name at least one texture")
         return self
+
+    def with_overrides(self, *, presets: list[str] | None = None,
+                       trials_per_class: int | None = None) -> TaxelSceneConfig:
+        """A copy with the CLI's overrides (``presets`` once each, in order), validated like
+        the file."""
+        from ..config_file import with_overrides
+
+        return with_overrides(self, {
+            "presets": ("presets", None if not presets else list(dict.fromkeys(presets))),
+            "trials_per_class": ("trials_per_class", trials_per_class)})
 
 
 class WelchConfig(_Model):
@@ -230,9 +240,9 @@ class FeatureConfig(_Model):
         return self
 
 
-def load_scene_config(path: str | Path) -> SceneConfig:
+def load_taxel_scene_config(path: str | Path) -> TaxelSceneConfig:
     """Read and validate a taxel-slip scene config (one :class:`InputError` line)."""
-    return load_yaml_model(path, SceneConfig, not_a_mapping="a taxel-slip scene config is a "
+    return load_yaml_model(path, TaxelSceneConfig, not_a_mapping="a taxel-slip scene config is a "
                            "YAML mapping; see configs/scene_taxel_slip.yaml")
 
 

@@ -9,8 +9,11 @@ slip-interface features and classify the slip interface.
 - :func:`slip_interface`: Gaussian naive Bayes with ``folds``-fold cross-validation per
   trial (stratified by slip type): full spectrum, best band chosen inside each training
   set (nested; the headline) and best band chosen on all trials (optimistic);
-- :func:`write_feature_stream`: Gamma and G2 per window and named band as a signal stream
-  ``spectral_features`` that ``tactile train`` reads.
+- :func:`write_taxel_features`: Gamma and G2 per window and named band as a signal stream
+  ``spectral_features`` that ``tactile train`` reads (through the one feature-stream
+  writer, :func:`tactile_cli.spectral.stream_features.write_feature_stream`);
+- :func:`slip_interface_file`: :func:`slip_interface` on a file with its config, and the
+  result written as JSON and a figure (``tactile slip-interface``).
 
 Folds are dealt per trial, seeded and independent of file order, by
 :mod:`tactile_cli.learn.splits` (the same rule as ``tactile train --cv``; importing it does
@@ -21,6 +24,7 @@ from __future__ import annotations
 
 import time
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,7 +42,6 @@ from ..spectral import (
     multi_finger_g2,
 )
 from ..store.trials import TactileFile, Trial
-from ..store.writer import StoreWriter
 from .config import SLIP_TYPES, FeatureConfig, WelchConfig
 from .features import above_noise_floor, contact_taxels
 from .simulate import REST, SLIP, pressure_stream, taxel_stream
@@ -74,6 +77,13 @@ def file_presets(tf: TactileFile) -> list[str]:
         raise InputError("no taxel-array trials (trial label preset with streams "
                          "<preset>_f0, <preset>_f1, as tactile simulate taxel-slip writes)",
                          path=tf.path)
+    for trial in tf.trials():  # a lost label would drop the trial from every result
+        if trial.labels.get("preset") is None:
+            streams = [taxel_stream(p, 0) for p in seen if trial.has_signal(taxel_stream(p, 0))]
+            if streams:
+                raise InputError(f"trial {trial.name!r} has the taxel stream {streams[0]} but "
+                                 "no trial label preset; every taxel trial names its preset",
+                                 path=tf.path, where=f"{trial.where}/labels")
     return list(seen)
 
 
@@ -311,7 +321,8 @@ def score_feature(fv: FeatureValues, y: np.ndarray, names: list[str], folds: np.
 
 @dataclass(frozen=True)
 class SlipInterfaceResult:
-    """Accuracy table of :func:`slip_interface`, per preset and feature."""
+    """Accuracy table of :func:`slip_interface`, per preset and feature; ``out`` and
+    ``plot``: the JSON and figure :func:`slip_interface_file` wrote."""
 
     path: Path
     scores: tuple[FeatureScore, ...]
@@ -320,6 +331,8 @@ class SlipInterfaceResult:
     datasets: tuple[str, ...]
     elapsed_s: float
     features: dict[str, PresetFeatures] = field(default_factory=dict, repr=False)
+    out: Path | None = None
+    plot: Path | None = None
 
     def as_dict(self) -> dict[str, Any]:
         nested = [s.nested_best_band for s in self.scores]
@@ -329,6 +342,23 @@ class SlipInterfaceResult:
                 "scores": [s.as_dict() for s in self.scores],
                 "nested_at_least_85": sum(a >= 0.85 for a in nested),
                 "n_combinations": len(nested), "elapsed_s": round(self.elapsed_s, 3)}
+
+    def table(self) -> tuple[str, list[str], list[list[str]]]:
+        """Title, columns and one row per preset and feature (accuracies in %)."""
+        cols = ["preset", "feature", "trials", "decided", "full spectrum",
+                "best band (nested)", "best band (optimistic)", "(f, w) Hz"]
+        rows = [[s.preset, s.feature, str(s.n_trials), str(s.n_decided),
+                 f"{100 * s.full_spectrum:.1f} %", f"{100 * s.nested_best_band:.1f} %",
+                 f"{100 * s.optimistic_best_band:.1f} %",
+                 f"({s.optimistic_band_hz[0]:.4g}, {s.optimistic_band_hz[1]:.4g})"]
+                for s in self.scores]
+        return (f"slip interface, {self.folds}-fold CV per trial ({', '.join(self.datasets)})",
+                cols, rows)
+
+    def summary_lines(self) -> list[str]:
+        nested = [s.nested_best_band for s in self.scores]
+        return [f"nested best band >= 85 %: {sum(a >= 0.85 for a in nested)} of "
+                f"{len(nested)} preset x feature combinations"]
 
 
 def slip_interface(path: str | Path, fcfg: FeatureConfig, *,
@@ -369,21 +399,52 @@ def slip_interface(path: str | Path, fcfg: FeatureConfig, *,
                                tuple(datasets), time.perf_counter() - started, kept)
 
 
+def slip_interface_file(path: str | Path, *, config: str | Path | None = None,
+                        folds: int | None = None, out: str | Path | None = None,
+                        plot: str | Path | None = None, overwrite: bool = False,
+                        progress: Progress | None = None) -> SlipInterfaceResult:
+    """:func:`slip_interface` on the taxel file ``path`` with the feature config of the
+    YAML file ``config`` (default: the built-in one) and ``folds`` outer folds when given;
+    with ``out`` the result as JSON with its provenance, with ``plot`` the features
+    against frequency (Fig. 12) as a PNG. Outputs are checked before any work (not an
+    input, writable, not there unless ``overwrite``)."""
+    import dataclasses
+    import json
+
+    from pydantic import ValidationError
+
+    from ..input_guard import check_outputs
+    from ..store.atomic import atomic_file, check_output_file, write_text
+    from ..store.provenance import provenance_record
+    from .config import load_feature_config
+    from .plots import plot_feature_spectra
+
+    check_outputs({"out": out, "plot": plot}, [path, config])
+    for target in (out, plot):
+        if target is not None:
+            check_output_file(target, overwrite=overwrite)
+    if out is not None and plot is not None and Path(out).resolve() == Path(plot).resolve():
+        raise InputError("`out` and `plot` name the same file; give each its own", path=out)
+    fcfg = load_feature_config(config) if config is not None else FeatureConfig()
+    if folds is not None:
+        try:
+            fcfg = FeatureConfig.model_validate({**fcfg.model_dump(), "folds": folds})
+        except ValidationError as exc:
+            raise InputError(f"`folds` (={folds}): {exc.errors()[0]['msg']}") from None
+    result = slip_interface(path, fcfg, progress=progress)
+    if out is not None:
+        record = provenance_record([path] + ([config] if config is not None else []),
+                                   fcfg.model_dump(mode="json"))
+        write_text(out, json.dumps({**result.as_dict(), "provenance": record}, indent=2)
+                   + "\n", overwrite=overwrite)
+    if plot is not None:
+        with atomic_file(plot, overwrite=overwrite, keep_suffix=True) as tmp:
+            plot_feature_spectra(result.features, tmp)
+    return dataclasses.replace(result, out=None if out is None else Path(out),
+                               plot=None if plot is None else Path(plot))
+
+
 # -- the feature stream -----------------------------------------------------------------------
-def _named_bins(f_hz: np.ndarray, bands: dict[str, tuple[float, float]]
-                ) -> tuple[list[str], np.ndarray, np.ndarray]:
-    df = float(f_hz[1] - f_hz[0])
-    top = len(f_hz) - 1
-    names, lo, hi = [], [], []
-    for name, (a, b) in bands.items():
-        i = int(np.clip(np.ceil(a / df - 1e-9), 1, top))
-        j = int(np.clip(np.floor(b / df + 1e-9), i, top))
-        names.append(name)
-        lo.append(i)
-        hi.append(j)
-    return names + ["full"], np.array(lo + [1]), np.array(hi + [top])
-
-
 @dataclass(frozen=True)
 class FeatureStreamResult:
     out: Path
@@ -400,63 +461,88 @@ class FeatureStreamResult:
                 "window_s": self.window_s, "hop_s": self.hop_s,
                 "rank_deficient": self.rank_deficient}
 
+    def summary_lines(self) -> list[str]:
+        flagged = [p for p, bad in self.rank_deficient.items() if bad]
+        return [f"wrote {self.out}: {self.n_trials} trial(s), {self.n_windows} windows of "
+                f"{self.window_s:g} s every {self.hop_s:g} s, {len(self.channels)} channels"
+                + (f"; rank-deficient bands (G2 biased up) in {', '.join(flagged)}"
+                   if flagged else "")]
 
-def write_feature_stream(path: str | Path, out: str | Path, fcfg: FeatureConfig, *,
-                         command: str | None = None, provenance: dict[str, Any] | None = None,
+
+def write_taxel_features(path: str | Path, out: str | Path, fcfg: FeatureConfig | None = None,
+                         *, config: str | Path | None = None, command: str | None = None,
                          overwrite: bool = False, progress: Progress | None = None
                          ) -> FeatureStreamResult:
     """Gamma, single- and multi-finger G2 per window (``window_s`` every ``hop_s``) and
     per named band of ``fcfg.bands_hz`` (plus ``full``) for every taxel trial of ``path``,
     written to ``out`` as stream ``spectral_features`` (channels ``<feature>_<band>``,
     one sample per window at its end time) with per-window labels ``slip`` (rest, hand,
-    world: the trial's slip type once the window's centre lies inside its slip segment). Contact
-    is estimated once per trial (rest against slip segment). Windows whose CSD averages
-    fewer segment-bin products than channels are flagged in the sensor attribute
-    ``rank_deficient_bands``."""
+    world: the trial's slip type once the window's centre lies inside its slip segment),
+    by the one feature-stream writer
+    :func:`tactile_cli.spectral.stream_features.write_feature_stream`.
+    ``fcfg``: the feature config, else the one in the YAML file ``config``, else the
+    defaults. Contact is estimated once per trial (rest against slip segment). Windows
+    whose CSD averages fewer segment-bin products than channels are flagged in the sensor
+    attribute ``rank_deficient_bands``."""
+    from ..input_guard import check_outputs
+    from ..spectral.stream_features import (
+        FeatureSensor,
+        FeatureTrial,
+        named_bins,
+        window_plan,
+        write_feature_stream,
+    )
+    from ..store.atomic import check_output_file
+    from ..store.provenance import provenance_record
+    from .config import load_feature_config
+
     progress = progress or NullProgress()
+    check_outputs({"out": out}, [path, config])
+    check_output_file(out, overwrite=overwrite)
+    if fcfg is None:
+        fcfg = load_feature_config(config) if config is not None else FeatureConfig()
     classes = (REST, *SLIP_TYPES)
-    n_windows = 0
     flags: dict[str, bool] = {}
-    channels: tuple[str, ...] = ()
-    with TactileFile(path) as tf, StoreWriter(out, command=command, config=provenance,
-                                              overwrite=overwrite) as w:
-        source = w.add_source(path)
+    channels: list[tuple[str, ...]] = []
+
+    def windows_of(tf: TactileFile) -> Iterator[FeatureTrial]:
         presets = file_presets(tf)
-        trials = [t for t in tf.trials() if str(t.labels.get("preset")) in presets]
-        progress.start(len(trials), "spectral features")
+        progress.start(sum(str(t.labels.get("preset")) in presets for t in tf.trials()),
+                       "spectral features")
         for preset in presets:
             wc = _welch(fcfg, preset)
-            bands = fcfg.bands_hz.get(preset, {})
             pt = read_preset_trials(tf, preset)
             rate = pt.rate_hz
-            win = int(round(fcfg.window_s * rate))
-            hop = max(1, int(round(fcfg.hop_s * rate)))
+            n_taxels = pt.slip[0].shape[-1]
+            what = f"preset {preset!r}"
+            win, hop = window_plan(fcfg.window_s, fcfg.hop_s, rate, 0, 0, what=what,
+                                   path=tf.path)
             nperseg = min(wc.nperseg, win)
             if win < 8:
                 raise InputError(f"`window_s` (={fcfg.window_s}) holds {win} samples of "
                                  f"preset {preset!r}; at least 8 are needed", path=tf.path)
             f_hz = np.fft.rfftfreq(nperseg, 1 / rate)
-            band_names, lo, hi = _named_bins(f_hz, bands)
-            channels = tuple(f"{feat}_{b}" for feat in FEATURES for b in band_names)
+            band_names, lo, hi = named_bins(f_hz, fcfg.bands_hz.get(preset, {}))
+            these = tuple(f"{feat}_{b}" for feat in FEATURES for b in band_names)
+            channels.append(these)
             noverlap = wc.noverlap(nperseg)
-            n_seg = (win - noverlap) // (nperseg - noverlap)
-            n_avg = n_seg * (hi - lo + 1)
-            flags[preset] = bool((n_avg < pt.slip[0].shape[-1]).any())
-            sensor = w.add_sensor(f"{preset}_spectral", kind="taxel_array",
-                                  sample_rate_hz=1.0 / fcfg.hop_s, channel_names=channels,
-                                  channel_units="1", preset=preset,
-                                  window_s=fcfg.window_s, hop_s=fcfg.hop_s,
-                                  rank_deficient_bands=",".join(
-                                      n for n, a in zip(band_names, n_avg, strict=True)
-                                      if a < pt.slip[0].shape[-1]),
-                                  description="power ratio Gamma and group square coherence "
-                                  "G2 per window and band (paper 004)")
+            n_avg = ((win - noverlap) // (nperseg - noverlap)) * (hi - lo + 1)
+            flags[preset] = bool((n_avg < n_taxels).any())
+            sensor = FeatureSensor(
+                f"{preset}_spectral", these, "taxel_array", 1.0 / fcfg.hop_s, {
+                    "preset": preset, "window_s": fcfg.window_s, "hop_s": fcfg.hop_s,
+                    "rank_deficient_bands": ",".join(
+                        n for n, a in zip(band_names, n_avg, strict=True) if a < n_taxels),
+                    "description": "power ratio Gamma and group square coherence G2 per "
+                    "window and band (paper 004)"})
             delays = pt.delays_s if fcfg.sequential_correction else None
             for ti, name in enumerate(pt.names):
                 trial = tf.trial(name)
                 sigs = [trial.signal(taxel_stream(preset, k)) for k in range(len(pt.slip))]
-                data = np.stack([s.data.astype(np.float64) for s in sigs])  # (F, n, N)
                 n = min(len(s.data) for s in sigs)
+                window_plan(fcfg.window_s, fcfg.hop_s, rate, n, len(sigs) * n_taxels,
+                            what=what, path=tf.path)
+                data = np.stack([s.data.astype(np.float64) for s in sigs])  # (F, n, N)
                 ends = np.arange(win, n + 1, hop)
                 idx = ends[:, None] - win + np.arange(win)
                 windows = data[:, :n][:, idx]                                # (F, W, win, N)
@@ -471,21 +557,19 @@ def write_feature_stream(path: str | Path, out: str | Path, fcfg: FeatureConfig,
                 gamma = np.nanmean([f.gamma for f in feats], axis=0)
                 g2 = np.nanmean([f.g2 for f in feats], axis=0)
                 g2m = multi_finger_g2(finger_ensembles(feats, delays, contacts), lo, hi)
-                values = np.concatenate([gamma, g2, g2m], axis=1)
                 t_end = sigs[0].t_s[ends - 1] + 1.0 / rate
                 s0, _ = _segment(trial, SLIP)
                 centre = t_end - fcfg.window_s / 2
                 label = np.where(centre > s0 + 1e-9, classes.index(pt.slip_type[ti]), 0)
-                tw = w.trial(name, labels=trial.labels, split=trial.split, sources=[source],
-                             annotations=[(a.start_s, a.end_s, a.label)
-                                          for a in trial.annotations],
-                             duration_s=trial.duration_s)
-                tw.write_signal(FEATURE_STREAM, sensor=sensor, data=np.nan_to_num(values),
-                                t_s=t_end, sample_labels={"slip": (label.astype(np.int64),
-                                                                   classes)})
-                n_windows += len(ends)
+                yield FeatureTrial(trial, sensor, np.concatenate([gamma, g2, g2m], axis=1),
+                                   t_end, {"slip": (label.astype(np.int64), classes)})
                 progress.advance(1)
         progress.finish()
-        written = w.commit()
-    return FeatureStreamResult(written, len(trials), n_windows, channels, fcfg.window_s,
-                               fcfg.hop_s, flags)
+
+    record = provenance_record([path] + ([config] if config is not None else []),
+                               fcfg.model_dump(mode="json"))
+    written = write_feature_stream(path, out, windows_of, command=command, config=record,
+                                   overwrite=overwrite)
+    return FeatureStreamResult(written.out, written.n_trials, written.n_windows,
+                               channels[-1] if channels else (), fcfg.window_s, fcfg.hop_s,
+                               flags)

@@ -46,7 +46,7 @@ from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.provenance import current_command
 from ..store.writer import StoreWriter
-from .config import SLIP_TYPES, PresetConfig, SceneConfig
+from .config import SLIP_TYPES, PresetConfig, TaxelSceneConfig
 
 #: Trial label values; the annotations of every trial.
 REST, SLIP = "rest", "slip"
@@ -135,7 +135,7 @@ def _crosstalk(n_taxels: int, level: float) -> np.ndarray:
     return k / k.sum(axis=1, keepdims=True)
 
 
-def simulate_trial(cfg: SceneConfig, preset_name: str, slip: str, k: int,
+def simulate_trial(cfg: TaxelSceneConfig, preset_name: str, slip: str, k: int,
                    seed: int) -> SceneTrial:
     """One trial of ``preset_name`` with slip type ``slip`` (hand or world); see the module
     docstring. ``seed`` and ``k`` fix every sample."""
@@ -210,8 +210,14 @@ class TaxelSlipResult:
                 "n_trials": sum(sum(c.values()) for c in self.counts.values()),
                 "duration_s": round(self.duration_s, 3), "elapsed_s": round(self.elapsed_s, 3)}
 
+    def summary_lines(self) -> list[str]:
+        counts = ", ".join(f"{p} {c['hand']}+{c['world']}" for p, c in self.counts.items())
+        return [f"taxel-slip -> {self.out} (seed {self.seed}): "
+                f"{sum(sum(c.values()) for c in self.counts.values())} trials ({counts} "
+                f"hand+world), simulated in {self.elapsed_s:.1f} s"]
 
-def simulate_taxel_slip(cfg: SceneConfig, out: str | Path, *, seed: int,
+
+def simulate_taxel_slip(cfg: TaxelSceneConfig, out: str | Path, *, seed: int,
                         progress: Progress | None = None, overwrite: bool = False,
                         command: str | None = None) -> TaxelSlipResult:
     """Simulate ``trials_per_class`` object/hand and object/world trials of every preset in

@@ -4,7 +4,8 @@
   Voigt blocks (mass, spring and damper in parallel), each hung from a parent node (another
   block or ``ground``), the block whose displacement the motor prescribes, the block whose
   motion the accelerometer registers, and the contact links that a touch adds;
-- :class:`SceneConfig`: ``tactile simulate vibrotouch`` (``configs/scene_vibrotouch.yaml``);
+- :class:`VibroTouchSceneConfig`: ``tactile simulate vibrotouch``
+  (``configs/scene_vibrotouch.yaml``);
 - :class:`DetectorConfig`: the spectral and force triggers of sec. 2.4
   (``configs/detect_contact.yaml``).
 
@@ -14,11 +15,13 @@ names the file, the line and the key.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from ..config_file import describe_key_first, load_yaml_model
+from ..errors import InputError
 
 #: The fixed node every chain ends at (the office table of Fig. 2).
 GROUND = "ground"
@@ -145,7 +148,7 @@ def load_model_config(path: str | Path) -> ModelConfig:
                            "configs/vibro_model.yaml")
 
 
-class SceneConfig(_Model):
+class VibroTouchSceneConfig(_Model):
     """Every parameter of ``tactile simulate vibrotouch`` (paper 003, secs. 2.3-2.4).
 
     Values the paper gives are marked with their section; the others are the scene's own
@@ -220,7 +223,7 @@ class SceneConfig(_Model):
     """The contact state is updated (and crossfaded) every this many seconds."""
 
     @model_validator(mode="after")
-    def _check(self) -> SceneConfig:
+    def _check(self) -> VibroTouchSceneConfig:
         for key in ("gap_mm", "second_contact_s", "touch_n", "touch_s", "touch_gap_s",
                     "motion_band_hz"):
             lo, hi = getattr(self, key)
@@ -238,11 +241,19 @@ class SceneConfig(_Model):
                              "simulate")
         return self
 
+    def with_overrides(self, *, contact_trials: int | None = None,
+                       touch_trials: int | None = None) -> VibroTouchSceneConfig:
+        """A copy with the CLI's overrides, validated like the file."""
+        from ..config_file import with_overrides
 
-def load_scene_config(path: str | Path) -> SceneConfig:
+        return with_overrides(self, {"contact_trials": ("contact_trials", contact_trials),
+                                     "touch_trials": ("touch_trials", touch_trials)})
+
+
+def load_vibrotouch_config(path: str | Path) -> VibroTouchSceneConfig:
     """Read and validate a vibrotouch scene config (one :class:`InputError` line on a
     problem)."""
-    return load_yaml_model(path, SceneConfig, describe=describe_key_first,
+    return load_yaml_model(path, VibroTouchSceneConfig, describe=describe_key_first,
                            not_a_mapping="a vibrotouch scene config is a YAML mapping; see "
                            "configs/scene_vibrotouch.yaml")
 
@@ -313,3 +324,18 @@ def load_detector_config(path: str | Path) -> DetectorConfig:
     return load_yaml_model(path, DetectorConfig, describe=describe_key_first,
                            not_a_mapping="a contact-detector config is a YAML mapping; see "
                            "configs/detect_contact.yaml")
+
+
+def detector_config(path: str | Path | None = None, *,
+                    band_hz: tuple[float, float] | None = None) -> DetectorConfig:
+    """The detector config of file ``path`` (default: the paper's settings), its contact
+    band replaced by ``band_hz`` when given; one :class:`InputError` for a bad band."""
+    cfg = load_detector_config(path) if path is not None else DetectorConfig()
+    if band_hz is None:
+        return cfg
+    lo, hi = (float(v) for v in band_hz)
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+        raise InputError(f"`band_hz` (={lo:g},{hi:g}) must be a band in Hz: low,high with "
+                         "0 <= low < high")
+    return cfg.model_copy(update={"band_hz": (lo, hi)})
+

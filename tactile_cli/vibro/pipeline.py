@@ -11,6 +11,7 @@ without it, the detections are listed and nothing is scored.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -268,3 +269,194 @@ def find_band(f: TactileFile, cfg: DetectorConfig, *, width_hz: float | None = N
     best = int(np.argmax(scores))
     lo = float(starts[best])
     return BandProposal((lo, lo + width), float(scores[best]), starts, scores, len(amps))
+
+
+# -- the file-level verbs of the commands -----------------------------------------------------
+def _figure_meta(inputs: list[Path], config: dict[str, Any]) -> dict[str, str]:
+    from ..store.provenance import png_meta, provenance_record
+
+    return png_meta(provenance_record(inputs, config))
+
+
+def _check_plot(plot: str | Path | None, inputs: list[Path], *,
+                overwrite: bool) -> Path | None:
+    """The figure path of ``plot`` (``.png`` added when it has no suffix), checked before
+    any work: not an input, writable, not there unless ``overwrite``."""
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+    from .plots import figure_path
+
+    if plot is None:
+        check_outputs({}, inputs)
+        return None
+    target = figure_path(plot)
+    check_outputs({"plot": target}, inputs)
+    return check_output_file(target, overwrite=overwrite)
+
+
+@dataclass(frozen=True)
+class ModelFileResult:
+    """What ``tactile vibro-model`` computed: the model config, its spectra (see
+    :class:`~tactile_cli.vibro.model.ModelSpectra`) and the figure written, if any."""
+
+    config_path: Path
+    config: Any
+    spectra: Any
+    plot: Path | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**self.spectra.as_dict(), "config": str(self.config_path),
+                "plot": None if self.plot is None else str(self.plot)}
+
+    def summary_lines(self) -> list[str]:
+        cfg, out = self.config, self.as_dict()
+        lines = [f"lumped model {self.config_path}: {len(cfg.blocks)} blocks, "
+                 f"{len(cfg.contact)} contact links; |x_{cfg.sensor} / u_{cfg.source}| over "
+                 f"{cfg.f_min_hz:g}-{cfg.f_max_hz:g} Hz"]
+        for key, title in (("resonances_free", "no contact"), ("resonances_contact", "contact")):
+            peaks = ", ".join(f"{r['f_hz']:.1f} Hz ({r['amplitude']:.3g})" for r in out[key])
+            lines.append(f"  {title:>10}: {peaks or 'no resonance'}")
+        for key, title in (("natural_free_hz", "no contact"), ("natural_contact_hz", "contact")):
+            lines.append(f"  natural frequencies (Hz), {title:>10}: "
+                         + ", ".join(f"{v:.1f}" for v in out[key]))
+        return lines + ([f"  spectra -> {self.plot}"] if self.plot is not None else [])
+
+
+def model_file(config: str | Path, *, plot: str | Path | None = None,
+               overwrite: bool = False) -> ModelFileResult:
+    """Solve the lumped model of the YAML file ``config`` (both spectra, resonances and
+    natural frequencies) and, with ``plot``, draw Fig. 3A to that PNG (provenance in its
+    text chunks)."""
+    from .config import load_model_config
+    from .model import model_spectra
+    from .plots import plot_model_spectra
+
+    config = Path(config)
+    target = _check_plot(plot, [config], overwrite=overwrite)
+    cfg = load_model_config(config)
+    spectra = model_spectra(cfg)
+    if target is not None:
+        plot_model_spectra(spectra, target, overwrite=overwrite,
+                           meta=_figure_meta([config], cfg.model_dump(mode="json")))
+    return ModelFileResult(config, cfg, spectra, target)
+
+
+@dataclass(frozen=True)
+class ContactFileResult:
+    """What ``tactile detect-contact FILE`` found: every trial's detections, the proposed
+    band (``propose_band``) and the figure written, if any."""
+
+    report: DetectionReport
+    band: BandProposal | None = None
+    plot: Path | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**self.report.as_dict(),
+                "band": None if self.band is None else self.band.as_dict(),
+                "plot": None if self.plot is None else str(self.plot)}
+
+    def table(self) -> tuple[str, list[str], list[list[str]]] | None:
+        """Title, columns and rows of the contact trials (None without one)."""
+        rows = [r for r in self.as_dict()["trials"] if r["scenario"] == "contact"]
+        if not rows:
+            return None
+        cols = ["trial", "contact s", "vibration s", "force s", "lead s", "false alarms",
+                "SNR vib", "SNR force"]
+        return (f"contact detection, band {self.report.config['band_hz']} Hz", cols,
+                [[r["trial"], _text(r.get("contact_s")), _text(r.get("vibration_s")),
+                  _text(r.get("force_s")), _text(r.get("lead_s")),
+                  str(r.get("vibration_false_alarms", "-")), _text(r.get("vibration_snr"), ".1f"),
+                  _text(r.get("force_snr"), ".1f")] for r in rows])
+
+    def summary_lines(self) -> list[str]:
+        tot, lines = self.report.totals(), []
+        if tot["n_contacts"]:
+            lines.append(f"vibration detected {tot['vibration_detected']}/{tot['n_contacts']}, "
+                         f"force {tot['force_detected']}/{tot['n_contacts']}; false alarms "
+                         f"{tot['false_alarms']} (force {tot['force_false_alarms']}); SNR "
+                         f"{_text(tot['vibration_snr'], '.1f')} vs "
+                         f"{_text(tot['force_snr'], '.1f')}; vibration leads force by "
+                         f"{_text(tot['mean_lead_s'], '.2f')} s on average")
+        if tot["n_touches"]:
+            lines.append(f"touches: vibration {tot['vibration_touch_hits']}/{tot['n_touches']} "
+                         f"({tot['vibration_touch_false_alarms']} false), force "
+                         f"{tot['force_touch_hits']}/{tot['n_touches']} "
+                         f"({tot['force_touch_false_alarms']} false)")
+        if self.band is not None:
+            b = self.band.as_dict()
+            lines.append(f"most contact-sensitive band: {b['band_hz'][0]:g}-"
+                         f"{b['band_hz'][1]:g} Hz (score {b['score']}, {b['n_recordings']} "
+                         "recordings)")
+        return lines + ([f"figure -> {self.plot}"] if self.plot is not None else [])
+
+
+def _text(v: float | None, spec: str = ".3f") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def detect_contact_file(path: str | Path, *, config: str | Path | None = None,
+                        band_hz: tuple[float, float] | None = None,
+                        trials: list[str] | None = None, plot: str | Path | None = None,
+                        propose_band: bool = False, band_width_hz: float | None = None,
+                        overwrite: bool = False) -> ContactFileResult:
+    """:func:`detect_contacts` on the tactile file ``path`` with the detector of ``config``
+    (default: the paper's) and ``band_hz``; with ``propose_band`` the band-finder's answer
+    (bands of ``band_width_hz``); with ``plot`` the Figs. 5-6 page as a PNG."""
+    from .config import detector_config
+    from .plots import plot_detections
+
+    path = Path(path)
+    inputs = [path] + ([Path(config)] if config is not None else [])
+    target = _check_plot(plot, inputs, overwrite=overwrite)
+    cfg = detector_config(config, band_hz=band_hz)
+    if band_width_hz is not None and not (np.isfinite(band_width_hz) and band_width_hz > 0):
+        raise InputError(f"`band_width_hz` (={band_width_hz}) must be a positive width in Hz")
+    with TactileFile(path) as f:
+        report = detect_contacts(f, cfg, trials=trials)
+        proposal = find_band(f, cfg, width_hz=band_width_hz) if propose_band else None
+    if target is not None:
+        plot_detections(report, target, overwrite=overwrite,
+                        meta=_figure_meta(inputs, report.config))
+    return ContactFileResult(report, proposal, target)
+
+
+@dataclass(frozen=True)
+class SamplesResult:
+    """The accelerometer samples of one trial written as the text ``--follow`` reads."""
+
+    trial: str
+    n_samples: int
+    sample_rate_hz: float
+    out: Path
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"trial": self.trial, "n_samples": self.n_samples,
+                "sample_rate_hz": self.sample_rate_hz, "out": str(self.out)}
+
+    def summary_lines(self) -> list[str]:
+        return [f"{self.trial}: {self.n_samples} samples at {self.sample_rate_hz:g} Hz -> "
+                f"{self.out}"]
+
+
+def write_trial_samples(path: str | Path, out: str | Path, *, trial: str | None,
+                        overwrite: bool = False) -> SamplesResult:
+    """The first accelerometer channel of ``trial`` in the tactile file ``path`` written to
+    ``out`` as text, one value (g) per line: a recording to replay through
+    :func:`~tactile_cli.vibro.stream.follow_input`."""
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+    from .stream import write_samples
+
+    path, out = Path(path), Path(out)
+    check_outputs({"out": out}, [path])
+    check_output_file(out, overwrite=overwrite)
+    if not trial:
+        raise InputError("name one trial with `trial` to write its samples", path=path)
+    with TactileFile(path) as f:
+        t = f.trial(trial)
+        name = _stream(t, VIBRATION_KINDS)
+        if name is None:
+            raise InputError("trial has no accelerometer stream", path=path, where=t.where)
+        sig = t.signal(name)
+        write_samples(sig.data[:, 0], out, overwrite=overwrite)
+    return SamplesResult(t.name, int(sig.data.shape[0]), float(sig.sample_rate_hz), out)

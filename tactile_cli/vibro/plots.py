@@ -14,13 +14,19 @@ from .model import ModelSpectra
 from .pipeline import DetectionReport, TrialDetection
 
 
-def _save(fig, path: str | Path, meta: Mapping[str, str] | None) -> Path:
-    return save_figure(fig, Path(path).with_suffix(Path(path).suffix or ".png"), meta=meta,
-                       dpi=110, overwrite=True)
+def figure_path(path: str | Path) -> Path:
+    """Where a figure named ``path`` is written: ``path``, ``.png`` added when it has no
+    suffix."""
+    path = Path(path)
+    return path.with_suffix(path.suffix or ".png")
+
+
+def _save(fig, path: str | Path, meta: Mapping[str, str] | None, overwrite: bool) -> Path:
+    return save_figure(fig, figure_path(path), meta=meta, dpi=110, overwrite=overwrite)
 
 
 def plot_model_spectra(spectra: ModelSpectra, path: str | Path, *,
-                       meta: Mapping[str, str] | None = None) -> Path:
+                       meta: Mapping[str, str] | None = None, overwrite: bool = False) -> Path:
     """Both spectra of the lumped model on a log scale, resonances marked (Fig. 3A)."""
     import matplotlib
 
@@ -38,7 +44,7 @@ def plot_model_spectra(spectra: ModelSpectra, path: str | Path, *,
     ax.legend()
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    return _save(fig, path, meta)
+    return _save(fig, path, meta, overwrite)
 
 
 def _trigger_axes(ax, det: TrialDetection, which: str, unit: str) -> None:
@@ -75,7 +81,8 @@ def _trigger_axes(ax, det: TrialDetection, which: str, unit: str) -> None:
 
 
 def plot_detections(report: DetectionReport, path: str | Path, *,
-                    meta: Mapping[str, str] | None = None, trial: str | None = None) -> Path:
+                    meta: Mapping[str, str] | None = None, trial: str | None = None,
+                    overwrite: bool = False) -> Path:
     """Fig. 5/6-like page: the vibration and force triggers of one trial (``trial``, else
     the first contact trial, else the first) and, over every scored contact trial, the
     detection times after the true contact of both sensors (Fig. 5C)."""
@@ -118,4 +125,4 @@ def plot_detections(report: DetectionReport, path: str | Path, *,
                 transform=ax.transAxes)
         ax.set_axis_off()
     fig.tight_layout()
-    return _save(fig, path, meta)
+    return _save(fig, path, meta, overwrite)

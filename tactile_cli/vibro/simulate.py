@@ -45,7 +45,7 @@ from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.provenance import current_command
 from ..store.writer import StoreWriter
-from .config import LinkConfig, SceneConfig
+from .config import LinkConfig, VibroTouchSceneConfig
 from .model import assemble, frequency_response
 
 G_M_S2 = 9.80665
@@ -70,7 +70,7 @@ class SceneTrial:
     labels: dict[str, Any] = field(default_factory=dict)
 
 
-def _erm_displacement_m(cfg: SceneConfig, n: int, rng: np.random.Generator) -> np.ndarray:
+def _erm_displacement_m(cfg: VibroTouchSceneConfig, n: int, rng: np.random.Generator) -> np.ndarray:
     """(n,) motor displacement: wandering fundamental, harmonics and broadband buzz (m)."""
     from scipy.signal import butter, sosfiltfilt
 
@@ -88,7 +88,7 @@ def _erm_displacement_m(cfg: SceneConfig, n: int, rng: np.random.Generator) -> n
     return u + cfg.buzz_um * 1e-6 * rng.standard_normal(n)
 
 
-def _motion_vibration_g(cfg: SceneConfig, moving: np.ndarray,
+def _motion_vibration_g(cfg: VibroTouchSceneConfig, moving: np.ndarray,
                         rng: np.random.Generator) -> np.ndarray:
     """(n,) the gripper drive's band-limited vibration where ``moving`` (n,) is 1 (g)."""
     from scipy.signal import butter, sosfilt
@@ -102,7 +102,7 @@ def _motion_vibration_g(cfg: SceneConfig, moving: np.ndarray,
     return x * moving
 
 
-def _respond_g(cfg: SceneConfig, u_m: np.ndarray, states: np.ndarray) -> np.ndarray:
+def _respond_g(cfg: VibroTouchSceneConfig, u_m: np.ndarray, states: np.ndarray) -> np.ndarray:
     """(n,) accelerometer response (g) to the motor displacement ``u_m`` (n,) with the
     contact stiffnesses ``states`` (n_steps, 3) [actuating, sensing, human] N/m, one row
     per ``state_step_s``, crossfaded linearly between rows."""
@@ -135,14 +135,14 @@ def _respond_g(cfg: SceneConfig, u_m: np.ndarray, states: np.ndarray) -> np.ndar
     return (1 - w) * outputs[inverse[k0], cols] + w * outputs[inverse[k1], cols]
 
 
-def _sensor_g(cfg: SceneConfig, a_g: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _sensor_g(cfg: VibroTouchSceneConfig, a_g: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     x = a_g + cfg.accel_noise_g * rng.standard_normal(len(a_g))
     if cfg.accel_lsb_g > 0:
         x = np.round(x / cfg.accel_lsb_g) * cfg.accel_lsb_g
     return x
 
 
-def simulate_contact_trial(cfg: SceneConfig, k: int, seed: int) -> SceneTrial:
+def simulate_contact_trial(cfg: VibroTouchSceneConfig, k: int, seed: int) -> SceneTrial:
     """One gripper-object trial (sec. 2.4.1); see the module docstring."""
     rng = np.random.default_rng([seed, 1, k])
     fs, ff = cfg.accel_rate_hz, cfg.force_rate_hz
@@ -185,7 +185,7 @@ def simulate_contact_trial(cfg: SceneConfig, k: int, seed: int) -> SceneTrial:
                        (t_c1, duration, "contact")], labels)
 
 
-def simulate_touch_trial(cfg: SceneConfig, k: int, seed: int) -> SceneTrial:
+def simulate_touch_trial(cfg: VibroTouchSceneConfig, k: int, seed: int) -> SceneTrial:
     """One grasped object-human trial (sec. 2.4.2); see the module docstring."""
     rng = np.random.default_rng([seed, 2, k])
     fs, ff = cfg.accel_rate_hz, cfg.force_rate_hz
@@ -239,8 +239,14 @@ class VibroTouchResult:
                 "duration_s": round(self.duration_s, 3), "elapsed_s": round(self.elapsed_s, 3),
                 "trials": list(self.trials)}
 
+    def summary_lines(self) -> list[str]:
+        scen = [t["scenario"] for t in self.trials]
+        return [f"vibrotouch -> {self.out} (seed {self.seed}): {scen.count('contact')} contact "
+                f"and {scen.count('touch')} touch trials, {self.duration_s:.1f} s in all, "
+                f"simulated in {self.elapsed_s:.1f} s"]
 
-def simulate_vibrotouch(cfg: SceneConfig, out: str | Path, *, seed: int,
+
+def simulate_vibrotouch(cfg: VibroTouchSceneConfig, out: str | Path, *, seed: int,
                         progress: Progress | None = None, overwrite: bool = False,
                         command: str | None = None,
                         sources: Sequence[str | Path] = ()) -> VibroTouchResult:

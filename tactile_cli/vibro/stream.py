@@ -6,10 +6,17 @@ one spectrum frame is computed (:class:`~tactile_cli.spectral.SpectrumTracker`),
 peak taken and the trigger of :mod:`.features` updated; each update's latency (from the
 arrival of the chunk that completed the frame to the trigger's decision) is timed against
 the refresh period.
+
+A live stream is checked line by line, like any input: a value that is not a number, not
+finite (``nan``, ``inf``, ``1e400``), beyond :data:`MAX_ABS_G` or on a line longer than
+:data:`MAX_LINE_CHARS` stops the run with one :class:`InputError` naming its line, so no
+event is ever reported from it.
 """
 
 from __future__ import annotations
 
+import math
+import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -24,6 +31,10 @@ from .config import DetectorConfig
 from .features import StreamingTrigger
 
 SCENARIOS = ("contact", "touch")
+#: Longest line a stream may send (a number, or a ``#`` comment), characters.
+MAX_LINE_CHARS = 1024
+#: Largest |acceleration| a sample may hold (g): an accelerometer saturates far below it.
+MAX_ABS_G = 1e6
 
 
 def read_samples(source: IO[str], *, name: str, chunk: int, follow_s: float = 0.0,
@@ -39,17 +50,27 @@ def read_samples(source: IO[str], *, name: str, chunk: int, follow_s: float = 0.
     def parse(text: str) -> None:
         nonlocal line_no
         line_no += 1
+        if len(text.rstrip("\r\n")) > MAX_LINE_CHARS:
+            raise InputError(f"line {line_no} is longer than {MAX_LINE_CHARS} characters (one "
+                             "acceleration value in g per line)", path=name)
         text = text.strip()
         if not text or text.startswith("#"):
             return
         try:
-            values.append(float(text))
+            value = float(text)
         except ValueError:
             raise InputError(f"line {line_no}: {text[:40]!r} is not a number (one "
                              "acceleration value in g per line)", path=name) from None
+        if not (math.isfinite(value) and abs(value) <= MAX_ABS_G):
+            raise InputError(f"line {line_no}: {text[:40]!r} is not a finite acceleration "
+                             f"within +-{MAX_ABS_G:g} g; no event is reported from it",
+                             path=name)
+        values.append(value)
 
     while True:
-        line = source.readline()
+        line = source.readline(MAX_LINE_CHARS + 2)
+        if len(pending) + len(line) > MAX_LINE_CHARS + 1 and not line.endswith("\n"):
+            parse(pending + line)  # refuses it: too long, whether or not it is complete
         if not line:
             if follow_s > 0:
                 now = time.monotonic()
@@ -99,6 +120,14 @@ class FollowResult:
                                "max": round(float(lat.max()), 4)},
                 "refresh_ms": round(self.refresh_ms, 3),
                 "over_budget": int(np.sum(lat > self.refresh_ms)) if self.latencies_ms else 0}
+
+    def summary_lines(self) -> list[str]:
+        out = self.as_dict()
+        lat = out["latency_ms"]
+        return [f"{self.n_samples} samples, {self.n_updates} updates, {len(self.events)} "
+                f"{self.scenario} events; per-update latency mean {lat['mean']:.3f} ms, p99 "
+                f"{lat['p99']:.3f} ms, max {lat['max']:.3f} ms (refresh every "
+                f"{out['refresh_ms']:g} ms; {out['over_budget']} over)"]
 
 
 class ContactStream:
@@ -178,12 +207,41 @@ def follow(source: IO[str], cfg: DetectorConfig, *, rate_hz: float, name: str,
                         1e3 * cfg.hop_s, scenario)
 
 
-def write_samples(values: np.ndarray, path: str | Path) -> Path:
+def follow_input(source: str | Path, *, config: str | Path | None = None,
+                 band_hz: tuple[float, float] | None = None, rate_hz: float = 2500.0,
+                 scenario: str = "contact", follow_s: float = 0.0,
+                 on_event: Callable[[float], None] | None = None) -> FollowResult:
+    """:func:`follow` on the text file ``source`` (``"-"``: standard input) with the
+    detector of ``config`` (default: the paper's settings) and, when given, its contact band
+    replaced by ``band_hz``; ``rate_hz``: the stream's sample rate; ``follow_s``: seconds to
+    wait for more samples at the end of a file."""
+    from ..input_guard import note_input
+    from .config import detector_config
+
+    cfg = detector_config(config, band_hz=band_hz)
+    if not (math.isfinite(rate_hz) and rate_hz > 0):
+        raise InputError(f"`rate_hz` (={rate_hz}) must be a positive number of samples per "
+                         "second")
+    if not (math.isfinite(follow_s) and follow_s >= 0):
+        raise InputError(f"`follow_s` (={follow_s}) must be >= 0 seconds")
+    if str(source) == "-":
+        return follow(sys.stdin, cfg, rate_hz=rate_hz, name="<stdin>", scenario=scenario,
+                      on_event=on_event)
+    path = Path(source)
+    if not path.is_file():
+        raise InputError("no such file", path=path)
+    note_input(path)
+    with open(path, encoding="utf-8", errors="replace") as src:
+        return follow(src, cfg, rate_hz=rate_hz, name=str(path), scenario=scenario,
+                      follow_s=follow_s, on_event=on_event)
+
+
+def write_samples(values: np.ndarray, path: str | Path, *, overwrite: bool = False) -> Path:
     """Write (n,) samples as text, one per line (what :func:`follow` reads), atomically."""
     from ..store.atomic import atomic_file
 
     path = Path(path)
-    with atomic_file(path, overwrite=True) as tmp, open(tmp, "w", encoding="ascii",
-                                                         newline="\n") as f:
+    with atomic_file(path, overwrite=overwrite) as tmp, open(tmp, "w", encoding="ascii",
+                                                              newline="\n") as f:
         np.savetxt(f, np.asarray(values, dtype=np.float64).reshape(-1), fmt="%.6g")
     return path

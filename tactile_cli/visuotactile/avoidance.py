@@ -126,13 +126,11 @@ class AvoidanceConfig(_Model):
 
     def with_overrides(self, *, objects: list[str] | None = None,
                        interferences: int | None = None) -> AvoidanceConfig:
-        """A copy with the CLI's overrides (validated like the file)."""
-        data = self.model_dump()
-        if objects is not None:
-            data["objects"] = objects
-        if interferences is not None:
-            data["interferences"] = interferences
-        return AvoidanceConfig.model_validate(data)
+        """A copy with the CLI's overrides, validated like the file."""
+        from ..config_file import with_overrides
+
+        return with_overrides(self, {"objects": ("objects", objects),
+                                     "interferences": ("interferences", interferences)})
 
 
 def load_avoidance_config(path: str | Path) -> AvoidanceConfig:
@@ -145,10 +143,10 @@ def make_optics(cfg: OpticsConfig, seed: int) -> Any:
     """The scene's :class:`~.render.GelOptics`, drawn as ``tactile simulate digit-press``
     draws its unit for ``seed`` (:func:`.simulate.scene_optics`): another seed, another
     sensor."""
-    from .config import SceneConfig
+    from .config import DigitSceneConfig
     from .simulate import scene_optics
 
-    return scene_optics(SceneConfig(optics=cfg), seed)
+    return scene_optics(DigitSceneConfig(optics=cfg), seed)
 
 
 def interference_times(cfg: AvoidanceConfig, rng: np.random.Generator) -> np.ndarray:
@@ -238,6 +236,13 @@ class AvoidanceResult:
                                       if e.kind == "release_grip"),
                 "elapsed_s": self.elapsed_s, "trials": [t.as_dict() for t in self.trials]}
 
+    def summary_lines(self) -> list[str]:
+        s = self.as_dict()
+        return [f"digit-avoidance -> {self.out_dir} (seed {self.seed}): {s['n_trials']} trials, "
+                f"{s['n_frames']} frames, {s['n_interferences']} interferences; live monitor: "
+                f"{s['n_raise_grip']} raise and {s['n_release_grip']} release commands; "
+                f"simulated in {self.elapsed_s:.1f} s"]
+
 
 def _simulate_trial(name: str, obj: str, cfg: AvoidanceConfig, optics: Any,
                     rng: np.random.Generator, folder: Path, progress: Progress
@@ -323,7 +328,7 @@ def _simulate_trial(name: str, obj: str, cfg: AvoidanceConfig, optics: Any,
                            moving), truth)
 
 
-def ingest_command(out: Path, px_per_mm: float) -> str:
+def ingest_shell_command(out: Path, px_per_mm: float) -> str:
     """The ``tactile ingest`` command line for an avoidance scene folder."""
     return (f"tactile ingest {out / 'trials'} --trial-labels {out / 'trial_labels.csv'} "
             f"--annotations {out / 'annotations.csv'} --px-per-mm {px_per_mm:g} "
@@ -384,7 +389,7 @@ def simulate_digit_avoidance(cfg: AvoidanceConfig, out: str | Path, *, seed: int
         scene = {"scene": "digit-avoidance", "seed": seed, "tool_version": __version__,
                  "command": current_command(), "config": cfg.model_dump(mode="json"),
                  "optics": optics.as_dict(),
-                 "ingest": ingest_command(Path(out), optics.px_per_mm),
+                 "ingest": ingest_shell_command(Path(out), optics.px_per_mm),
                  "trials": [t.as_dict() for t in trials]}
         (tmp / "scene.json").write_text(json.dumps(scene, indent=2) + "\n", encoding="utf-8")
     return result

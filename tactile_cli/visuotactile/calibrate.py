@@ -53,6 +53,10 @@ PIXEL_UNITS = ("px", "px", "0-255", "0-255", "0-255", "0-255", "0-255", "0-255")
 NORMAL_LABELS = ("nx", "ny", "nz")
 #: Stream (and sensor) name of the pixel table.
 PIXEL_STREAM = "pixels"
+#: Smallest contact radius, as a share of the ball's radius, that labels a press: below
+#: it the sphere's normals tilt by less than 1.2 degrees at the circle's edge (flat labels),
+#: a sign of a wrong ``ball_radius_mm`` or ``px_per_mm``.
+MIN_CONTACT_FRACTION = 0.02
 
 
 @dataclass(frozen=True)
@@ -267,6 +271,31 @@ class NormalLabelsResult:
                 "elapsed_s": round(self.elapsed_s, 3),
                 "presses": [p.row() for p in self.presses]}
 
+    def summary_lines(self) -> list[str]:
+        """Per press its circle (or why none), the table written and the circle error."""
+        s = self.as_dict()
+        lines = []
+        for row in s["presses"]:
+            if row["status"] != "ok":
+                lines.append(f"{row['trial']}: not labelled: {row['status']}")
+                continue
+            err = ("" if row["centre_error_px"] is None else
+                   f"  error: centre {row['centre_error_px']:.2f} px, radius "
+                   f"{row['radius_error_px']:+.2f} px")
+            lines.append(f"{row['trial']}: circle ({row['centre_x_px']:.1f}, "
+                         f"{row['centre_y_px']:.1f}) r {row['radius_px']:.1f} px, "
+                         f"{row['n_contact']} contact + {row['n_flat']} flat px{err}")
+        lines.append(f"wrote {s['out']}: {s['n_pixels']:,} pixels from {s['n_labelled']} of "
+                     f"{s['n_presses']} presses ({s['n_contact_pixels']:,} in contact; "
+                     f"{s['n_flat_left_out']:,} flat pixels left out, at most "
+                     f"{s['flat_per_press']} per press); px_per_mm {s['px_per_mm']:g}")
+        for key in ("centre_error_px", "radius_error_px"):
+            if s[key] is not None:
+                lines.append(f"circle {key.replace('_px', '').replace('_', ' ')} against the "
+                             f"scene truth: median {s[key]['median']:.2f} px, max "
+                             f"{s[key]['max']:.2f} px (n={s[key]['n']})")
+        return lines
+
 
 def _stats(values: Sequence[float]) -> dict[str, float | int] | None:
     if not values:
@@ -285,10 +314,10 @@ def file_px_per_mm(file: TactileFile, trial: Trial) -> float:
         raise InputError(f"sensor {sensor.name!r} has no px_per_mm attribute; ingest the "
                          "frames with `tactile ingest ... --px-per-mm PX` (pixels per mm on the "
                          "gel)", path=file.path, where=f"/sensors/{sensor.name}")
-    if not (isinstance(value, int | float) and np.isfinite(value) and value > 0):
-        raise InputError(f"px_per_mm is {value!r}; expected a positive number",
-                         path=file.path, where=f"/sensors/{sensor.name}")
-    return float(value)
+    from .heightmap import check_px_per_mm
+
+    return check_px_per_mm(value, what="px_per_mm", path=file.path,
+                           where=f"/sensors/{sensor.name}")
 
 
 def _ball_radius(trial: Trial) -> float:
@@ -329,11 +358,17 @@ def label_press(trial: Trial, *, px_per_mm: float, flat_per_press: int,
         rerr = float(circle.radius_px - truth[2])
     if not circle.ok:
         return PressLabels(trial.name, circle, ball_mm, 0, 0, 0, cerr, rerr), None, None
-    if circle.radius_px / px_per_mm >= ball_mm:
+    radius_mm = circle.radius_px / px_per_mm
+    why = None
+    if radius_mm >= ball_mm:
+        why = f"contact radius {radius_mm:.2f} mm is not below the ball radius {ball_mm:g} mm"
+    elif radius_mm < MIN_CONTACT_FRACTION * ball_mm:
+        why = (f"contact radius {radius_mm:.3g} mm is under {100 * MIN_CONTACT_FRACTION:g} % "
+               f"of the ball radius {ball_mm:g} mm, so its normals would be flat")
+    if why is not None:
         circle = CircleFit(circle.x_px, circle.y_px, circle.radius_px, circle.n_boundary,
                            circle.residual_px, circle.threshold,
-                           f"contact radius {circle.radius_px / px_per_mm:.2f} mm is not below "
-                           f"the ball radius {ball_mm} mm (wrong ball_radius_mm or px_per_mm?)")
+                           f"{why} (wrong ball_radius_mm or px_per_mm?)")
         return PressLabels(trial.name, circle, ball_mm, 0, 0, 0, cerr, rerr), None, None
     h, w = frame.shape[:2]
     normals = sphere_normals((h, w), (circle.x_px, circle.y_px), circle.radius_px,
@@ -366,9 +401,17 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
     plot_dir: also write ``circles.png`` there (every press with its fitted circle, and the
     scene's true circle where known), the check the paper does by hand.
     """
-    from ..store.outdir import check_output_folder
-    from ..store.writer import StoreWriter
+    import contextlib
 
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+    from ..store.outdir import check_output_folder, output_folder
+    from ..store.writer import StoreWriter
+    from .heightmap import absolute_folder
+
+    plot_dir = None if plot_dir is None else absolute_folder(plot_dir)
+    check_outputs({"out": out, "plot_dir": plot_dir}, [calibration])
+    check_output_file(out, overwrite=overwrite)
     if plot_dir is not None:
         check_output_folder(plot_dir, overwrite=overwrite)
     started = time.perf_counter()
@@ -420,23 +463,24 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
                                 t_s=np.arange(len(rows), dtype=np.float64),
                                 sample_labels={n: (labels[:, i].astype(np.float32), None)
                                                for i, n in enumerate(NORMAL_LABELS)})
-            written = writer.commit()
-        if plot_dir is not None:
-            plot_circles(trials, presses, plot_dir, overwrite=overwrite)
+            with (output_folder(plot_dir, overwrite=overwrite) if plot_dir is not None
+                  else contextlib.nullcontext()) as folder:
+                if folder is not None:  # the figure first: both outputs or neither
+                    plot_circles(trials, presses, folder)
+                written = writer.commit()
     return NormalLabelsResult(written, px_per_mm, tuple(presses), flat_per_press,
                               time.perf_counter() - started)
 
 
-def plot_circles(trials: Sequence[Trial], presses: Sequence[PressLabels], plot_dir: str | Path,
-                 *, overwrite: bool = False, max_presses: int = 36) -> Path:
-    """``plot_dir/circles.png``: the first ``max_presses`` presses, each frame with its
-    fitted contact circle (solid) and the scene's true circle (dashed) where known."""
+def plot_circles(trials: Sequence[Trial], presses: Sequence[PressLabels], folder: str | Path,
+                 *, max_presses: int = 36) -> Path:
+    """``folder/circles.png`` (a folder being built, see :mod:`tactile_cli.store.outdir`):
+    the first ``max_presses`` presses, each frame with its fitted contact circle (solid)
+    and the scene's true circle (dashed) where known."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..store.outdir import output_folder
 
     shown = list(zip(trials, presses, strict=True))[:max_presses]
     cols = min(6, len(shown))
@@ -459,10 +503,11 @@ def plot_circles(trials: Sequence[Trial], presses: Sequence[PressLabels], plot_d
                      fontsize=7)
     fig.suptitle("contact circles: fitted (white), scene truth (black dashed)", fontsize=9)
     fig.tight_layout()
-    with output_folder(plot_dir, overwrite=overwrite) as tmp:
-        fig.savefig(tmp / "circles.png", dpi=90)
-    plt.close(fig)
-    return Path(plot_dir) / "circles.png"
+    try:
+        fig.savefig(Path(folder) / "circles.png", dpi=90)
+    finally:
+        plt.close(fig)
+    return Path(folder) / "circles.png"
 
 
 # -- precision of a normal model ------------------------------------------------------------

@@ -115,7 +115,7 @@ class TrialsConfig(_Model):
         return self
 
 
-class SceneConfig(_Model):
+class DigitSceneConfig(_Model):
     """A whole ``tactile simulate digit-press`` scene."""
 
     version: Literal[1] = 1
@@ -124,23 +124,20 @@ class SceneConfig(_Model):
     trials: TrialsConfig = TrialsConfig()
 
     def with_overrides(self, *, presses: int | None = None, per_object: int | None = None,
-                       objects: list[str] | None = None) -> SceneConfig:
-        """A copy with the CLI's overrides (validated like the file)."""
-        data = self.model_dump()
-        if presses is not None:
-            data["calibration"]["presses"] = presses
-        if per_object is not None:
-            data["trials"]["per_object"] = per_object
-        if objects is not None:
-            data["trials"]["objects"] = objects
-        return SceneConfig.model_validate(data)
+                       objects: list[str] | None = None) -> DigitSceneConfig:
+        """A copy with the CLI's overrides, validated like the file."""
+        from ..config_file import with_overrides
+
+        return with_overrides(self, {"presses": ("calibration.presses", presses),
+                                     "per_object": ("trials.per_object", per_object),
+                                     "objects": ("trials.objects", objects)})
 
 
-def load_scene_config(path: str | Path) -> SceneConfig:
+def load_digit_scene_config(path: str | Path) -> DigitSceneConfig:
     """Read and validate a digit-press scene config (one :class:`InputError` line)."""
-    return load_yaml_model(path, SceneConfig, not_a_mapping="a digit-press scene config is a "
-                           "YAML mapping; see configs/scene_digit_press.yaml")
+    return load_yaml_model(path, DigitSceneConfig, not_a_mapping="a digit-press scene config "
+                           "is a YAML mapping; see configs/scene_digit_press.yaml")
 
 
-__all__ = ["DIRECTIONS", "CalibrationConfig", "OpticsConfig", "SceneConfig", "TrialsConfig",
-           "load_scene_config"]
+__all__ = ["DIRECTIONS", "CalibrationConfig", "DigitSceneConfig", "OpticsConfig",
+           "TrialsConfig", "load_digit_scene_config"]

@@ -39,6 +39,24 @@ from .poisson import NZ_FLOOR, PoissonSolver, gradients_from_normals
 
 STREAM = "height_mm"
 SENSOR = "heightmap"
+#: The gel scales a camera can have, pixels per mm (a pixel from 1 m down to 0.1 um): a
+#: scale outside makes heights that vanish (or overflow) in float32.
+PX_PER_MM_RANGE = (1e-3, 1e4)
+
+
+def check_px_per_mm(value: object, *, what: str | None = None,
+                    path: str | Path | None = None, where: str | None = None) -> float:
+    """``value`` as a gel scale in pixels per mm inside :data:`PX_PER_MM_RANGE`; one
+    :class:`InputError` otherwise, naming the argument ``px_per_mm`` or ``what`` (``"sensor
+    attribute px_per_mm"``)."""
+    lo, hi = PX_PER_MM_RANGE
+    ok = (isinstance(value, int | float | np.integer | np.floating)
+          and not isinstance(value, bool) and bool(np.isfinite(value)) and lo <= value <= hi)
+    if not ok:
+        shown = f"`px_per_mm` (={value!r})" if what is None else f"{what} is {value!r}; it"
+        raise InputError(f"{shown} must be a gel scale from {lo:g} to {hi:g} pixels per mm",
+                         path=path, where=where)
+    return float(value)  # type: ignore[arg-type]
 
 
 @dataclass
@@ -55,8 +73,7 @@ class HeightMapper:
     _solvers: dict[tuple[int, int], PoissonSolver] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.px_per_mm) and self.px_per_mm > 0):
-            raise InputError(f"`px_per_mm` (={self.px_per_mm}) must be a positive number")
+        check_px_per_mm(self.px_per_mm)
         if self.skip_below is not None and not (np.isfinite(self.skip_below)
                                                 and self.skip_below >= 0):
             raise InputError(f"`skip_below` (={self.skip_below}) must be >= 0 colour units")
@@ -87,18 +104,33 @@ def frames_px_per_mm(tf: TactileFile, trial: Trial, px_per_mm: float | None) -> 
     """``px_per_mm`` if given, else the frames sensor's attribute; one InputError naming
     the file otherwise."""
     if px_per_mm is not None:
-        return float(px_per_mm)
+        return check_px_per_mm(px_per_mm)
     name = trial.frames().sensor_name
     value = tf.sensor(name).attrs.get("px_per_mm") if name in tf.sensor_names else None
     if value is None:
         raise InputError(f"sensor {name!r} has no px_per_mm attribute; ingest the images with "
                          "`tactile ingest --px-per-mm` or pass `px_per_mm`", path=tf.path,
                          where=f"/sensors/{name}")
-    if not (isinstance(value, int | float | np.integer | np.floating)
-            and not isinstance(value, bool) and np.isfinite(value) and value > 0):
-        raise InputError(f"px_per_mm is {value!r}; expected a positive number", path=tf.path,
-                         where=f"/sensors/{name}")
-    return float(value)
+    return check_px_per_mm(value, what="px_per_mm", path=tf.path, where=f"/sensors/{name}")
+
+
+def absolute_folder(folder: str | Path) -> Path:
+    """``folder`` made absolute, ``.`` and ``..`` removed (an output folder named ``.`` is
+    the current folder, built beside it like any other)."""
+    import os
+
+    return Path(os.path.abspath(folder))
+
+
+def check_frame_times(t_s: np.ndarray, trial: Trial) -> np.ndarray:
+    """``t_s`` (n_frames,) of ``trial``'s frames, refused unless finite and strictly
+    increasing (repeated times would make every frame-to-frame change look instant)."""
+    t_s = np.asarray(t_s, dtype=np.float64)
+    if not np.isfinite(t_s).all() or (t_s.size > 1 and not (np.diff(t_s) > 0).all()):
+        raise InputError(f"trial {trial.name!r}: frame times are not finite and strictly "
+                         "increasing; each frame needs its own time", path=trial.path,
+                         where=f"{trial.where}/frames/t_s")
+    return t_s
 
 
 def frame_trials(tf: TactileFile) -> list[Trial]:
@@ -113,6 +145,9 @@ def frame_trials(tf: TactileFile) -> list[Trial]:
 def trial_heights(mapper: HeightMapper, trial: Trial) -> tuple[np.ndarray, np.ndarray]:
     """(n_frames, H, W) float32 mm and (n_frames,) t_s of one trial's frames."""
     frames = trial.frames()
+    if len(frames) == 0:
+        raise InputError(f"trial {trial.name!r} holds 0 frames; a height map needs one",
+                         path=trial.path, where=f"{trial.where}/frames")
     ref = frames.reference
     h, w = frames.shape[:2]
     out = np.empty((len(frames), h, w), dtype=np.float32)
@@ -163,8 +198,8 @@ class TrialHeights:
 @dataclass(frozen=True)
 class HeightmapResult:
     """What :func:`heightmap_file` wrote: the output, per-trial summaries, the overall
-    RMSE (root of the mean square over every pixel of every trial, mm) and the time spent
-    per frame (ms, reading included)."""
+    RMSE (root of the mean square over every pixel of every trial, mm), the time spent
+    per frame (ms, reading included) and the folder of figures (``plot``), if any."""
 
     out: Path
     trials: list[TrialHeights]
@@ -173,6 +208,7 @@ class HeightmapResult:
     ms_per_frame: float
     px_per_mm: float
     run_dir: str
+    plot: Path | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {"out": str(self.out), "run": self.run_dir, "px_per_mm": self.px_per_mm,
@@ -180,9 +216,51 @@ class HeightmapResult:
                 "ms_per_frame": self.ms_per_frame,
                 "trials": [t.__dict__ for t in self.trials]}
 
+    def summary_lines(self) -> list[str]:
+        lines = [f"wrote {self.out}: {sum(t.n_frames for t in self.trials)} height maps of "
+                 f"{len(self.trials)} trial(s), {self.ms_per_frame:.1f} ms per frame (reading "
+                 f"and writing included), px_per_mm {self.px_per_mm:g}"]
+        if self.rmse_mm is not None:
+            lines.append(f"height RMSE vs truth: {self.rmse_mm:.4f} mm over all pixels, "
+                         f"{self.rmse_contact_mm:.4f} mm over contact pixels")
+        return lines + ([f"wrote {self.plot}/height_*.png"] if self.plot is not None else [])
+
 
 def _rmse(sq: float, n: int) -> float | None:
     return float(np.sqrt(sq / n)) if n else None
+
+
+def _check_heightmap_outputs(path: str | Path, run_dir: str | Path, out: str | Path,
+                             truth_dir: str | Path | None, plot: str | Path | None, *,
+                             overwrite: bool) -> None:
+    """Before any work: no output is, contains or lies inside an input (the frames file, the
+    run's model, the truth folder); the outputs can be written."""
+    from ..input_guard import check_outputs
+    from ..store.atomic import check_output_file
+    from ..store.outdir import check_output_folder
+
+    check_outputs({"out": out, "plot": plot}, [path, Path(run_dir) / "model.pt"],
+                  trees=[truth_dir])
+    check_output_file(out, overwrite=overwrite)
+    if plot is not None:
+        check_output_folder(plot, merge=True)
+    if truth_dir is not None and not Path(truth_dir).is_dir():
+        raise InputError("truth folder not found (give a scene's truth/ folder)",
+                         path=truth_dir)
+
+
+def _figures(tf: TactileFile, folder: Path, peaks: dict[str, tuple[int, np.ndarray]],
+             truth_dir: str | Path | None, px_per_mm: float) -> None:
+    """One Fig. 2-style PNG per trial in ``folder``: its frame of largest height."""
+    from .plots import height_figure
+
+    for name, (k, heights) in peaks.items():
+        true = None
+        if truth_dir is not None:
+            shape = (len(tf.trial(name).frames()), *heights.shape)
+            true = load_truth(Path(truth_dir), name, shape)[k]
+        height_figure(tf.trial(name).frames()[k], heights, px_per_mm,
+                      folder / f"height_{name}.png", truth_mm=true, title=f"{name}, frame {k}")
 
 
 def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
@@ -190,31 +268,43 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
                    skip_below: float | None = None, workers: int | None = None,
                    trials: Sequence[str] | None = None, overwrite: bool = False,
                    command: str | None = None, progress: Progress | None = None,
+                   plot: str | Path | None = None,
                    keep: dict[str, np.ndarray] | None = None) -> HeightmapResult:
     """Height maps of every frame of every trial with frames in ``path`` (or of
     ``trials``), written to the new file ``out`` (see the module docstring). With
-    ``truth_dir`` (the scene's ``truth/``) the RMSE against the true heights is reported.
-    ``keep``, when given, receives trial -> (n_frames, H, W) heights (for figures)."""
+    ``truth_dir`` (the scene's ``truth/``) the RMSE against the true heights is reported;
+    with ``plot`` a folder gets one Fig. 2-style PNG per trial (the frame of largest
+    height), same-named files replaced. ``workers`` threads (BLAS and OpenMP included;
+    results do not depend on it). ``keep``, when given, receives trial -> (n_frames, H, W)
+    heights. Outputs are checked before any work and written only when all succeeded."""
+    import contextlib
     import time
 
+    from ..store.outdir import output_folder
+    from ..threads import check_threads, limit_threads
+
+    plot = None if plot is None else absolute_folder(plot)
+    _check_heightmap_outputs(path, run_dir, out, truth_dir, plot, overwrite=overwrite)
+    threads = default_workers() if workers is None else check_threads(workers, "workers")
     progress = progress or NullProgress()
-    model = NormalModel.from_run(run_dir)
+    with limit_threads(threads):
+        model = NormalModel.from_run(run_dir)
     run_path = Path(run_dir)
     config = {"run": str(run_dir), "px_per_mm": px_per_mm, "skip_below": skip_below,
               "truth": None if truth_dir is None else str(truth_dir),
               "nz_floor": NZ_FLOOR, "input_kind": model.input_kind}
     summaries: list[TrialHeights] = []
+    peaks: dict[str, tuple[int, np.ndarray]] = {}
     sq_all = sq_contact = 0.0
     n_all = n_contact = 0
     n_frames = 0
     t0 = time.perf_counter()
-    with TactileFile(path) as tf:
+    with TactileFile(path) as tf, limit_threads(threads):
         chosen = frame_trials(tf)
         if trials is not None:
             chosen = tf.trials(list(trials))
         scale = frames_px_per_mm(tf, chosen[0], px_per_mm)
-        mapper = HeightMapper(model, scale, skip_below=skip_below,
-                              workers=default_workers() if workers is None else workers)
+        mapper = HeightMapper(model, scale, skip_below=skip_below, workers=threads)
         with StoreWriter(out, command=command, config=config, overwrite=overwrite) as w:
             source = w.add_source(path)
             model_source = w.add_source(run_path / "model.pt")
@@ -243,10 +333,7 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
                 elif (h, wd) != shape:
                     raise InputError(f"trial {trial.name!r} has frames of {wd}x{h} px; earlier "
                                      f"trials have {shape[1]}x{shape[0]}", path=tf.path)
-                if n > 1 and not (np.diff(t_s) > 0).all():
-                    raise InputError(f"trial {trial.name!r}: frame times repeat; a height "
-                                     "stream needs increasing times", path=tf.path,
-                                     where=f"{trial.where}/frames/t_s")
+                check_frame_times(t_s, trial)
                 tw = w.trial(trial.name, labels=trial.labels, split=trial.split,
                              sources=[source, model_source],
                              annotations=[(a.start_s, a.end_s, a.label)
@@ -268,14 +355,22 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
                                            float(truth.max(initial=0.0)))
                 if keep is not None:
                     keep[trial.name] = heights
+                if plot is not None:
+                    k = int(heights.reshape(n, -1).max(axis=1).argmax())
+                    peaks[trial.name] = (k, heights[k].copy())
                 summaries.append(summary)
                 n_frames += n
                 progress.advance()
-            w.commit()
-    elapsed = time.perf_counter() - t0
+            elapsed = time.perf_counter() - t0  # the figures are not height maps' time
+            with (output_folder(plot, merge=True) if plot is not None
+                  else contextlib.nullcontext()) as folder:
+                if folder is not None:  # before the commit: both outputs or neither
+                    _figures(tf, folder, peaks, truth_dir, scale)
+                w.commit()
     return HeightmapResult(Path(out), summaries, _rmse(sq_all, n_all),
                            _rmse(sq_contact, n_contact),
-                           1e3 * elapsed / max(1, n_frames), scale, str(run_dir))
+                           1e3 * elapsed / max(1, n_frames), scale, str(run_dir),
+                           None if plot is None else Path(plot))
 
 
 def read_height_maps(trial: Trial) -> tuple[np.ndarray, np.ndarray, float]:
@@ -294,6 +389,7 @@ def read_height_maps(trial: Trial) -> tuple[np.ndarray, np.ndarray, float]:
             float(sig.sensor.attrs.get("px_per_mm", float("nan"))))
 
 
-__all__ = ["SENSOR", "STREAM", "HeightMapper", "HeightmapResult", "TrialHeights",
+__all__ = ["PX_PER_MM_RANGE", "SENSOR", "STREAM", "HeightMapper", "HeightmapResult",
+           "TrialHeights", "absolute_folder", "check_frame_times", "check_px_per_mm",
            "frame_trials", "frames_px_per_mm", "heightmap_file", "load_truth",
            "read_height_maps", "trial_heights"]

@@ -24,7 +24,7 @@ gripper to move for ``motion_s`` after each of its own commands.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -96,6 +96,7 @@ class MonitorFileResult:
     hold_s: float
     motion_s: float
     trials: list[TrialMonitor]
+    plot: Path | None = None
 
     def totals(self) -> dict[str, Any]:
         scored = [t.score for t in self.trials if t.score is not None]
@@ -116,6 +117,35 @@ class MonitorFileResult:
         return {"file": self.file, "source": self.source, "mesh": list(self.mesh),
                 "hold_s": self.hold_s, "motion_s": self.motion_s, "totals": self.totals(),
                 "trials": [t.as_dict() for t in self.trials]}
+
+    def summary_lines(self) -> list[str]:
+        """Per trial its threshold, mode changes, grip commands and score; the totals."""
+        lines = []
+        for t in self.trials:
+            lines.append(f"{t.trial}: threshold {t.threshold:.6g} (monitor from frame "
+                         f"{t.start_frame}; gripper motion from {t.motion_from})")
+            lines += [f"  {e.t_s:8.3f} s  frame {e.frame:5d}  {e.kind:<12} {e.detail}"
+                      for e in t.events
+                      if e.kind in ("slip", "no_slip", "raise_grip", "release_grip")]
+            ignored = sum(1 for e in t.events if e.kind == "ignored_moving")
+            restarts = sum(1 for e in t.events if e.kind == "timer_restart")
+            line = (f"  {restarts} timer restarts, {ignored} frames above threshold ignored "
+                    "while the gripper moved")
+            if t.score is not None:
+                s = t.score
+                delay = (f", mean delay {1e3 * sum(s.delays_s) / len(s.delays_s):.0f} ms"
+                         if s.delays_s else "")
+                line += (f"; truth: {s.caught}/{s.n_interferences} caught, {s.missed} "
+                         f"missed, {s.false_slips} false slips{delay}")
+            lines.append(line)
+        tot = self.totals()
+        if tot["trials_scored"]:
+            rate = tot["detection_rate"]
+            lines.append(f"all: {tot['caught']}/{tot['interferences']} interferences caught"
+                         + (f" ({100 * rate:.0f} %)" if rate is not None else "")
+                         + f", {tot['false_slips']} false slips, {tot['raise_grip']} raise and "
+                         f"{tot['release_grip']} release commands")
+        return lines
 
 
 def parse_mesh(text: str) -> tuple[int, int]:
@@ -247,7 +277,7 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
     maps = _MapSource(source, model_run)
     results: list[TrialMonitor] = []
     with TactileFile(path) as tf:
-        from .heightmap import STREAM
+        from .heightmap import STREAM, check_frame_times
 
         chosen = tf.trials(list(trials)) if trials else [
             t for t in tf.trials() if t.has_frames or t.has_signal(STREAM)]
@@ -257,6 +287,7 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
         progress.start(None, "frames")
         for trial in chosen:
             t_s, signal = trial_signal(tf, trial, maps, mesh, progress=progress)
+            check_frame_times(t_s, trial)
             intervals = [(a.start_s, a.end_s) for a in trial.annotations
                          if a.label == "gripper_moving"]
             flags = moving_flags(t_s, intervals) if intervals else None
@@ -277,6 +308,84 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
         progress.finish()
     return MonitorFileResult(str(path), source, (int(mesh[0]), int(mesh[1])), float(hold_s),
                              float(motion_s), results)
+
+
+#: ``ingest_frames(inputs, out, options)``: ingest the image-sequence folder(s) ``inputs``
+#: into the tactile file ``out`` with ``options`` (``px_per_mm``, ``trial_labels``,
+#: ``annotations``) and return ``out`` (``tactile monitor`` passes ``tactile_cli.ingest``).
+IngestFrames = Callable[[Path, Path, dict[str, Any]], Path]
+
+
+def frames_folder_plan(folder: str | Path) -> tuple[Path, dict[str, Any]]:
+    """What to ingest from a folder of frames: a scene folder (``trials/`` beside
+    ``scene.json``) gives its ``trials/`` with the scene's ``optics.px_per_mm`` and its
+    ``trial_labels.csv`` and ``annotations.csv`` where present; any other folder is
+    image-sequence folders without options."""
+    from ..config_file import parse_json, read_text
+    from ..input_guard import note_input
+
+    folder = Path(folder)
+    note_input(folder, tree=True)
+    scene = folder / "scene.json"
+    if not ((folder / "trials").is_dir() and scene.is_file()):
+        return folder, {}
+    doc = parse_json(read_text(scene, "scene file"), scene)
+    try:
+        px = float(doc["optics"]["px_per_mm"])
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"cannot read optics.px_per_mm ({type(exc).__name__}: {exc})",
+                         path=scene) from None
+    if not (math.isfinite(px) and px > 0):
+        raise InputError(f"optics.px_per_mm is {px}; expected a positive number of pixels "
+                         "per mm", path=scene)
+    labels, notes = folder / "trial_labels.csv", folder / "annotations.csv"
+    return folder / "trials", {"px_per_mm": px,
+                               "trial_labels": labels if labels.is_file() else None,
+                               "annotations": notes if notes.is_file() else None}
+
+
+def monitor_input(path: str | Path, *, ingest_frames: IngestFrames | None = None,
+                  plot: str | Path | None = None, overwrite: bool = False,
+                  model_run: str | Path | None = None, mesh: str | tuple[int, int] = DEFAULT_MESH,
+                  progress: Progress | None = None, **settings: Any) -> MonitorFileResult:
+    """:func:`monitor_file` on ``path``: a tactile file, or a folder of frames (see
+    :func:`frames_folder_plan`) ingested by ``ingest_frames`` into a temporary file first;
+    ``settings``: the other arguments of :func:`monitor_file`. With ``plot`` one PNG per
+    trial in that folder (added to it, same-named files replaced; ``overwrite``: the folder
+    replaced whole). ``plot`` is checked before any work and may not be, hold or lie inside
+    an input (the recording's folder above all: the replay never deletes its frames)."""
+    import dataclasses
+    import tempfile
+
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder, output_folder
+    from .heightmap import absolute_folder
+
+    path = Path(path)
+    plot = None if plot is None else absolute_folder(plot)
+    if not path.exists():
+        raise InputError("file not found", path=path)
+    model = None if model_run is None else Path(model_run) / "model.pt"
+    check_outputs({"plot": plot}, [path, model], trees=[path] if path.is_dir() else [])
+    if plot is not None:
+        check_output_folder(plot, overwrite=overwrite, merge=not overwrite)
+    cells = parse_mesh(mesh) if isinstance(mesh, str) else mesh
+    with tempfile.TemporaryDirectory(prefix="tactile-monitor-") as tmp:
+        data = path
+        if path.is_dir():
+            if ingest_frames is None:
+                raise InputError("a folder of frames needs `ingest_frames` (tactile_cli.ingest) "
+                                 "to be read; or give its ingested tactile file", path=path)
+            inputs, options = frames_folder_plan(path)
+            data = ingest_frames(inputs, Path(tmp) / "frames.h5", options)
+        result = monitor_file(data, model_run=model_run, mesh=cells, progress=progress,
+                              **settings)
+    if plot is not None:
+        with output_folder(plot, overwrite=overwrite, merge=not overwrite) as folder:
+            for trial in result.trials:
+                plot_trial(trial, folder / f"{trial.trial}.png")
+    return dataclasses.replace(result, file=str(path),
+                               plot=None if plot is None else Path(plot))
 
 
 def plot_trial(result: TrialMonitor, out: str | Path) -> None:
@@ -312,5 +421,6 @@ def plot_trial(result: TrialMonitor, out: str | Path) -> None:
     plt.close(fig)
 
 
-__all__ = ["BLOCK_FRAMES", "DEFAULT_MATCH_S", "MonitorFileResult", "TrialMonitor",
-           "monitor_file", "parse_mesh", "plot_trial", "trial_signal", "trial_truth"]
+__all__ = ["BLOCK_FRAMES", "DEFAULT_MATCH_S", "IngestFrames", "MonitorFileResult",
+           "TrialMonitor", "frames_folder_plan", "monitor_file", "monitor_input", "parse_mesh",
+           "plot_trial", "trial_signal", "trial_truth"]

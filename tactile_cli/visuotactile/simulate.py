@@ -51,7 +51,7 @@ from ..interrupt import raise_if_requested
 from ..progress import NullProgress, Progress
 from ..store.outdir import check_output_folder, output_folder
 from ..store.provenance import current_command
-from .config import SceneConfig
+from .config import DigitSceneConfig
 from .render import (
     DIGIT_HEIGHT_PX,
     DIGIT_PX_PER_MM,
@@ -71,7 +71,7 @@ TRIAL_LABELS = ("trial", "origin", "dataset", "object", "slip", "direction", "sl
 PNG_COMPRESS_LEVEL = 1
 
 
-def scene_optics(config: SceneConfig, seed: int) -> GelOptics:
+def scene_optics(config: DigitSceneConfig, seed: int) -> GelOptics:
     """The sensor of scene ``seed``: the config's optics with this unit's lighting drawn
     from the seed (:meth:`GelOptics.jittered`)."""
     o = config.optics
@@ -125,7 +125,7 @@ class TrialPlan:
         return shift, angle, depth
 
 
-def plan_trials(config: SceneConfig, seed: int) -> list[TrialPlan]:
+def plan_trials(config: DigitSceneConfig, seed: int) -> list[TrialPlan]:
     """Every object trial of the scene, drawn from ``seed`` (the first trial of each object
     holds still; the others slip in ``trials.directions`` taken in turn)."""
     tc, oc = config.trials, config.optics
@@ -159,7 +159,7 @@ class PressPlan:
     depth_mm: float
 
 
-def plan_presses(config: SceneConfig, seed: int) -> list[PressPlan]:
+def plan_presses(config: DigitSceneConfig, seed: int) -> list[PressPlan]:
     """Every calibration press of the scene, drawn from ``seed``."""
     cc, oc = config.calibration, config.optics
     plans = []
@@ -195,12 +195,20 @@ class DigitSceneResult:
                 "n_slip": sum(t.slip_onset_s is not None for t in self.trials),
                 "n_frames": self.n_frames, "px_per_mm": self.px_per_mm,
                 "elapsed_s": round(self.elapsed_s, 3),
-                "ingest": ingest_commands(self.out_dir, self.px_per_mm,
-                                          presses=bool(self.presses), trials=bool(self.trials))}
+                "ingest": ingest_shell_commands(self.out_dir, self.px_per_mm,
+                                                presses=bool(self.presses),
+                                                trials=bool(self.trials))}
+
+    def summary_lines(self) -> list[str]:
+        s = self.as_dict()
+        return [f"digit-press -> {self.out_dir} (seed {self.seed}): "
+                f"{s['n_calibration_presses']} calibration presses, {s['n_trials']} trials "
+                f"({s['n_slip']} slipping), {s['n_frames']} frames, simulated in "
+                f"{self.elapsed_s:.1f} s", *(f"  then: {line}" for line in s["ingest"])]
 
 
-def ingest_commands(out: Path, px_per_mm: float, *, presses: bool = True,
-                    trials: bool = True) -> list[str]:
+def ingest_shell_commands(out: Path, px_per_mm: float, *, presses: bool = True,
+                          trials: bool = True) -> list[str]:
     """The ``tactile ingest`` command lines for a scene folder (its parts that exist)."""
     lines = []
     if presses:
@@ -213,7 +221,7 @@ def ingest_commands(out: Path, px_per_mm: float, *, presses: bool = True,
     return lines
 
 
-def simulate_digit_press(config: SceneConfig, out_dir: str | Path, *, seed: int,
+def simulate_digit_press(config: DigitSceneConfig, out_dir: str | Path, *, seed: int,
                          progress: Progress | None = None, overwrite: bool = False,
                          command: str | None = None) -> DigitSceneResult:
     """Render every press and trial of ``config`` and write the scene folder ``out_dir``
@@ -258,8 +266,9 @@ def simulate_digit_press(config: SceneConfig, out_dir: str | Path, *, seed: int,
                      "command": command if command is not None else current_command(),
                      "config": config.model_dump(mode="json"), "optics": optics.as_dict(),
                      "n_frames_per_trial": n_per_trial,
-                     "ingest": ingest_commands(out, optics.px_per_mm, presses=bool(presses),
-                                               trials=bool(trials))}
+                     "ingest": ingest_shell_commands(out, optics.px_per_mm,
+                                                     presses=bool(presses),
+                                                     trials=bool(trials))}
             (tmp / "scene.json").write_text(json.dumps(scene, indent=2) + "\n",
                                             encoding="utf-8")
     finally:
@@ -296,7 +305,7 @@ def _save_png(path: Path, image: np.ndarray) -> None:
     Image.fromarray(image).save(path, compress_level=PNG_COMPRESS_LEVEL)
 
 
-def _write_press(tmp: Path, press: PressPlan, optics: GelOptics, config: SceneConfig,
+def _write_press(tmp: Path, press: PressPlan, optics: GelOptics, config: DigitSceneConfig,
                  seed: int, i: int) -> None:
     rng = np.random.default_rng(np.random.SeedSequence([seed, 3, i]))
     folder = tmp / "calibration" / press.name
@@ -315,7 +324,7 @@ def _write_press(tmp: Path, press: PressPlan, optics: GelOptics, config: SceneCo
         ball_radius_mm=np.float64(press.ball_radius_mm), depth_mm=np.float64(press.depth_mm))
 
 
-def _write_trial(tmp: Path, plan: TrialPlan, optics: GelOptics, config: SceneConfig, seed: int,
+def _write_trial(tmp: Path, plan: TrialPlan, optics: GelOptics, config: DigitSceneConfig, seed: int,
                  j: int, n: int, progress: Progress) -> None:
     rng = np.random.default_rng(np.random.SeedSequence([seed, 4, j]))
     texture_seed = np.random.SeedSequence([seed, 5, j])
@@ -374,5 +383,5 @@ def read_truth(path: str | Path) -> dict[str, np.ndarray]:
 
 
 __all__ = ["CALIBRATION_LABELS", "TRIAL_LABELS", "DigitSceneResult", "PressPlan", "TrialPlan",
-           "ingest_commands", "plan_presses", "plan_trials", "read_truth", "scene_optics",
+           "ingest_shell_commands", "plan_presses", "plan_trials", "read_truth", "scene_optics",
            "simulate_digit_press"]

@@ -34,7 +34,16 @@ import numpy as np
 from ..errors import InputError
 from ..progress import NullProgress, Progress
 from ..store.trials import TactileFile, Trial
-from .heightmap import STREAM, HeightMapper, frames_px_per_mm, read_height_maps, trial_heights
+from ..threads import limit_threads
+from .heightmap import (
+    STREAM,
+    HeightMapper,
+    absolute_folder,
+    check_frame_times,
+    frames_px_per_mm,
+    read_height_maps,
+    trial_heights,
+)
 from .mesh import slip_signal
 from .normals import NormalModel, default_workers
 
@@ -231,6 +240,14 @@ class TrialSlip:
             out["signal"] = [_finite_or_none(float(v)) for v in d.signal]
         return out
 
+    def verdict(self) -> str:
+        """``hit``, ``missed``, ``false alarm``, ``correct reject`` (``-`` without a label)."""
+        if self.score is None:
+            return "-"
+        if self.score.false_alarm:
+            return "hit + false alarm" if self.score.detected else "false alarm"
+        return "hit" if self.score.detected else "missed" if self.slip else "correct reject"
+
 
 def _finite_or_none(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
@@ -273,6 +290,7 @@ class SlipFileResult:
     rates: dict[str, Rates]
     best: dict[str, ScaleChoice]
     run_dir: str | None
+    plot: str | None = None
 
     def as_dict(self, *, with_signal: bool = True) -> dict[str, object]:
         return {
@@ -286,6 +304,33 @@ class SlipFileResult:
                         for src, r in self.rates.items()},
             "trials": [t.as_dict(with_signal=with_signal) for t in self.trials],
         }
+
+    def table(self) -> tuple[str, list[str], list[list[str]]]:
+        """Title, columns and one row per trial and source."""
+        cols = ["trial", "object", "source", "label", "onset (s)", "threshold",
+                "detected at (s)", "peak/static", "result"]
+        rows = []
+        for r in self.trials:
+            d = r.detection
+            rows.append([r.trial, r.object or "-", r.source,
+                         "-" if r.slip is None else ("slip" if r.slip else "no_slip"),
+                         "-" if r.onset_s is None else f"{r.onset_s:.3f}", f"{d.threshold:.4g}",
+                         "-" if d.first_time_s is None else f"{d.first_time_s:.3f}",
+                         f"{d.peak_ratio():.1f}", r.verdict()])
+        return (f"Slip signal of {self.path} (mesh {self.mesh[0]}x{self.mesh[1]}, threshold "
+                f"{self.scale:g} x mean of {self.n_static} static signals)", cols, rows)
+
+    def summary_lines(self) -> list[str]:
+        lines = []
+        for src, rates in self.rates.items():
+            best = self.best[src]
+            lines.append(f"{src}: detection rate {rates.detection_rate:.2f} over "
+                         f"{rates.n_slip} slip trials, false alarms {rates.false_alarms} of "
+                         f"{rates.n_slip + rates.n_no_slip} trials; best scale {best.scale:g} "
+                         f"(as good: {best.best_from:g}-{best.best_to:g}; detection "
+                         f"{best.rates.detection_rate:.2f}, false alarms "
+                         f"{best.rates.false_alarms})")
+        return lines + ([f"wrote {self.plot}/slip_*.png"] if self.plot is not None else [])
 
 
 def trial_maps(trial: Trial, source: str, mapper: HeightMapper | None
@@ -320,8 +365,8 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                      n_static: int = DEFAULT_N_STATIC, trials: Sequence[str] | None = None,
                      px_per_mm: float | None = None, workers: int | None = None,
                      progress: Progress | None = None,
-                     keep_maps: dict[tuple[str, str], np.ndarray] | None = None
-                     ) -> SlipFileResult:
+                     keep_maps: dict[tuple[str, str], np.ndarray] | None = None,
+                     plot: str | os.PathLike[str] | None = None) -> SlipFileResult:
     """The slip signal (eq. 10) on ``mesh`` of every trial of ``path`` (an ingested
     frames file or a ``tactile heightmap`` file), its adaptive threshold (``scale`` x the
     mean of the first ``n_static`` signals) and slip decision; with trial labels, the
@@ -329,7 +374,12 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
 
     source: ``height`` (the file's height maps, or the frames through the normal model of
     ``run_dir``), ``intensity`` (colour change from the reference), ``both``, or ``auto``
-    (height when the file holds height maps or ``run_dir`` is given, else intensity)."""
+    (height when the file holds height maps or ``run_dir`` is given, else intensity).
+    ``workers``: threads of the maps (BLAS and OpenMP included; results do not depend on
+    it). ``plot``: a folder for one PNG per trial and source (S, threshold, onset and
+    detection), same-named files replaced; checked before any work."""
+    plot = None if plot is None else absolute_folder(plot)
+    threads = _check_outputs(path, run_dir, plot, workers)
     if source not in SOURCES:
         raise InputError(f"`source` (={source!r}) must be one of {', '.join(SOURCES)}")
     if not (np.isfinite(scale) and scale > 0):
@@ -356,14 +406,15 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
             if first is None:
                 raise InputError("no trial holds frames or height maps", path=tf.path)
             mapper = HeightMapper(NormalModel.from_run(run_dir),
-                                  frames_px_per_mm(tf, first, px_per_mm),
-                                  workers=default_workers() if workers is None else workers)
+                                  frames_px_per_mm(tf, first, px_per_mm), workers=threads)
         prog.start(len(chosen) * len(sources), "slip signals")
         for t in chosen:
             slip, onset = trial_label(t.labels, path=tf.path, trial=t.name)
             obj = t.labels.get("object")
             for src in sources:
-                maps, t_s = trial_maps(t, src, mapper)
+                with limit_threads(threads):
+                    maps, t_s = trial_maps(t, src, mapper)
+                check_frame_times(t_s, t)
                 try:
                     sig = slip_signal(maps, mesh)
                     det = detect_slip(sig, t_s, n_static=n_static, scale=scale)
@@ -385,8 +436,44 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                                    [(bool(r.slip), r.onset_s) for r in labelled],
                                    n_static=n_static)
     cells = (int(mesh[0]), int(mesh[1]))
-    return SlipFileResult(str(path), cells, float(scale), int(n_static), out, rates, best,
-                          None if run_dir is None else str(run_dir))
+    result = SlipFileResult(str(path), cells, float(scale), int(n_static), out, rates, best,
+                            None if run_dir is None else str(run_dir))
+    if plot is not None:
+        _plot_signals(result, plot)
+        result.plot = str(plot)
+    return result
+
+
+def _check_outputs(path: str | os.PathLike[str], run_dir: str | os.PathLike[str] | None,
+                   plot: str | os.PathLike[str] | None, workers: int | None) -> int:
+    """Before any work: the plot folder is no input and can be written; the thread count
+    (returned) is a whole number the machine can run."""
+    from ..input_guard import check_outputs
+    from ..store.outdir import check_output_folder
+    from ..threads import check_threads
+
+    model = None if run_dir is None else os.path.join(run_dir, "model.pt")
+    check_outputs({"plot": plot}, [path, model])
+    if plot is not None:
+        check_output_folder(plot, merge=True)
+    return default_workers() if workers is None else check_threads(workers, "workers")
+
+
+def _plot_signals(result: SlipFileResult, plot: str | os.PathLike[str]) -> None:
+    """One PNG per trial and source in folder ``plot`` (Figs. 5, 7, 10, 11)."""
+    from ..store.outdir import output_folder
+    from .plots import slip_signal_figure
+
+    mesh = f"{result.mesh[0]}x{result.mesh[1]}"
+    with output_folder(plot, merge=True) as tmp:
+        for r in result.trials:
+            d = r.detection
+            slip_signal_figure(
+                d.t_s, d.signal, d.threshold, tmp / f"slip_{r.trial}_{r.source}.png",
+                onset_s=r.onset_s, detected_s=d.first_time_s,
+                first_judged_s=float(d.t_s[min(d.first_judged, d.t_s.size - 1)]),
+                unit="mm" if r.source == "height" else "colour units",
+                title=f"{r.trial} ({r.object or '-'}, {r.source}, mesh {mesh})")
 
 
 __all__ = ["DEFAULT_N_STATIC", "DEFAULT_SCALE", "SCALE_GRID", "SOURCES", "Rates", "ScaleChoice",

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..progress import NullProgress, Progress
-from .config import SceneConfig
+from .config import DigitSceneConfig
 from .signals import intensity_maps
 
 #: Perturbation axes, in the order they are reported.
@@ -133,7 +133,7 @@ class _Trial:
     gain: np.ndarray  # (n,) the scene's own slow LED flicker
 
 
-def scene_trials(config: SceneConfig, seed: int) -> list[_Trial]:
+def scene_trials(config: DigitSceneConfig, seed: int) -> list[_Trial]:
     """The object trials of digit-press scene ``seed``, rendered without camera noise
     (frames (n, H, W, 3) uint8 and the reference), with their slip labels; the press depth
     and the LEDs drift slowly as in the scene (:func:`.simulate.slow_drift`), the LED drift
@@ -212,7 +212,7 @@ def breaking_points(results: Sequence[LevelResult], *, baseline_noise: float = 2
     return out
 
 
-def run_stability(config: SceneConfig, seeds: Sequence[int], *,
+def run_stability(config: DigitSceneConfig, seeds: Sequence[int], *,
                   levels: dict[str, Sequence[Any]] | None = None,
                   height_mapper: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
                   axes: Sequence[str] = AXES,

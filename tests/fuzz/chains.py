@@ -306,6 +306,7 @@ def add_chain_cases(add, case, base: Path, rng: np.random.Generator) -> None:
     _run_folders(add, case, base, rng, REFUSE, EITHER, NON_UTF8, _truncate, _truncate_text)
     _clashes(add, case, base, REFUSE)
     _options(add, case, base, REFUSE, EITHER)
+    _nothing_lost(add, case, base, REFUSE, EITHER)
 
 
 def _json_edit(p: Path, fn) -> None:
@@ -580,3 +581,150 @@ def harmless_for(kind: str, role: str, mutation: str, command: str) -> bool:
     # the images: the frames sensor's kind and sample rate are never read
     return kind in ("visuo", "press") and command in ("slip-signal", "monitor") and \
         role == "sensor" and mutation.startswith(("del-sensor-kind", "sensor-"))
+
+
+# ------------------------------------------- nothing lost (issue 33) in the chain commands
+
+def _nothing_lost(add, case, base: Path, REFUSE, EITHER) -> None:
+    """The chain commands with an output that is their input or lies inside their input
+    folder (kind ``sacred``: the runner hashes ``{IN}`` before and after every run), an
+    output folder that cannot be written (``ro:x``), deeply nested configs, live-stream
+    garbage and tiny or huge numbers."""
+    h5, cfg, ch = base / "h5", base / "cfg", base / "chains"
+    model = "{BASE}/chains/run_normals"
+    sacred = {
+        h5 / "taxel_scene.h5": [
+            ["slip-interface", "{IN}", "--folds", "2", "--out", "{IN}", "--overwrite"],
+            ["slip-interface", "{IN}", "--folds", "2", "--plot", "{IN}", "--overwrite"],
+            ["features", "spectral", "{IN}", "--out", "{IN}", "--overwrite"],
+            ["features", "spectral", "{IN}", "--stream", "pvdf_f0", "--out", "{IN}"]],
+        h5 / "vibrotouch.h5": [
+            ["detect-contact", "{IN}", "--plot", "{IN}", "--overwrite"],
+            ["detect-contact", "{IN}", "--trial", "contact_00", "--samples-out", "{IN}",
+             "--overwrite"]],
+        cfg / "vibro_model.yaml": [["vibro-model", "{IN}", "--plot", "{IN}", "--overwrite"]],
+        cfg / "detect_contact.yaml": [
+            ["detect-contact", "{BASE}/h5/vibrotouch.h5", "--config", "{IN}", "--plot", "{IN}",
+             "--overwrite"]],
+        h5 / "press.h5": [
+            ["heightmap", "{IN}", "--model", model, "--out", "{IN}", "--overwrite"],
+            ["monitor", "{IN}", "--plot", "{IN}", "--overwrite"]],
+        h5 / "calib.h5": [["normal-labels", "{IN}", "--out", "{IN}", "--overwrite"]],
+        h5 / "heightmap.h5": [["slip-signal", "{IN}", "--plot", "{IN}"]],
+        h5 / "prepared.h5": [["accel-prepare", "{IN}", "--out", "{IN}", "--overwrite"]],
+        cfg / "scene_taxel_slip.yaml": [
+            ["simulate", "taxel-slip", "--config", "{IN}", "--out", "{IN}", "--overwrite"]],
+    }
+    for src, runs in sacred.items():
+        d = add("sacred", src, src.name, f"out-is-input-{src.stem}", "sacred", None)
+        for argv in runs:
+            case(d, argv[0], [*argv, "--no-progress"] if argv[0] in _PROGRESS else argv,
+                 REFUSE)
+    scene = add("sacred", ch / "digit_press", "digit_press", "scene-folder", "sacred", None)
+    for argv in (["monitor", "{IN}", "--plot", "{IN}", "--overwrite"],
+                 ["monitor", "{IN}", "--plot", f"{{IN}}/trials/{PRESS_TRIAL}", "--overwrite"],
+                 ["monitor", "{IN}", "--plot", "{IN}/plots"]):
+        case(scene, "monitor", [*argv, "--no-progress"], REFUSE)
+    _unwritable(add, case, base, REFUSE)
+    _nested_and_live(add, case, base, REFUSE)
+    _numbers(add, case, base, REFUSE, EITHER)
+
+
+#: the chain commands that take --no-progress
+_PROGRESS = {"slip-interface", "features", "heightmap", "monitor", "normal-labels",
+             "slip-signal", "accel-prepare", "simulate"}
+
+
+def _unwritable(add, case, base: Path, REFUSE) -> None:
+    """Every output option of the chain commands in a folder that cannot be written (the
+    runner makes ``{OUT}/ro`` immutable)."""
+    h5, cfg = "{BASE}/h5", "{BASE}/cfg"
+    model = "{BASE}/chains/run_normals"
+    runs = [
+        ["vibro-model", f"{cfg}/vibro_model.yaml", "--plot", "{OUT}/ro/m.png"],
+        ["detect-contact", f"{h5}/vibrotouch.h5", "--plot", "{OUT}/ro/d.png"],
+        ["detect-contact", f"{h5}/vibrotouch.h5", "--trial", "contact_00", "--samples-out",
+         "{OUT}/ro/s.txt"],
+        ["slip-interface", f"{h5}/taxel_scene.h5", "--folds", "2", "--out", "{OUT}/ro/r.json"],
+        ["slip-interface", f"{h5}/taxel_scene.h5", "--folds", "2", "--plot", "{OUT}/ro/r.png"],
+        ["features", "spectral", f"{h5}/taxel_scene.h5", "--out", "{OUT}/ro/f.h5"],
+        ["heightmap", f"{h5}/press.h5", "--model", model, "--out", "{OUT}/ro/h.h5"],
+        ["heightmap", f"{h5}/press.h5", "--model", model, "--out", "{OUT}/h.h5", "--plot",
+         "{OUT}/ro/figs"],
+        ["normal-labels", f"{h5}/calib.h5", "--out", "{OUT}/ro/p.h5"],
+        ["normal-labels", f"{h5}/calib.h5", "--out", "{OUT}/p.h5", "--plot", "{OUT}/ro/figs"],
+        ["slip-signal", f"{h5}/heightmap.h5", "--plot", "{OUT}/ro/figs"],
+        ["monitor", f"{h5}/press.h5", "--plot", "{OUT}/ro/figs"],
+        ["accel-prepare", f"{h5}/prepared.h5", "--segment-s", "0.5", "--out", "{OUT}/ro/p.h5"],
+        ["accel-prepare", f"{h5}/prepared.h5", "--segment-s", "0.5", "--out-dir",
+         "{OUT}/ro/d", "--workers", "0"],
+        ["simulate", "taxel-slip", "--config", f"{cfg}/scene_taxel_slip.yaml", "--out",
+         "{OUT}/ro/s.h5"],
+        ["simulate", "digit-press", "{OUT}/ro/s", "--config", f"{cfg}/scene_digit_press.yaml"],
+    ]
+    for i, argv in enumerate(runs):
+        d = add("chain-unwritable", base / "annotations.csv", "unused",
+                f"{argv[0]}-unwritable-{i}", "clash", None)
+        case(d, argv[0], [*argv, "--no-progress"] if argv[0] in _PROGRESS else argv, REFUSE,
+             clash=("ro:ro",))
+
+
+def _deep(p: Path) -> None:
+    p.write_text("a: " + "[" * 200 + "]" * 200 + "\n")
+
+
+def _nested_and_live(add, case, base: Path, REFUSE) -> None:
+    """Configs nested 200 deep and a scene.json 2,000 deep; live streams with a NaN, an infinity, a
+    number that overflows, an absurd acceleration and a 2 MB line."""
+    h5 = "{BASE}/h5"
+    deep = [("vibro_model.yaml", ["vibro-model", "{IN}"]),
+            ("detect_contact.yaml", ["detect-contact", f"{h5}/vibrotouch.h5", "--config",
+                                     "{IN}"]),
+            ("taxel_features.yaml", ["slip-interface", f"{h5}/taxel_scene.h5", "--config",
+                                     "{IN}", "--no-progress"]),
+            ("scene_vibrotouch.yaml", ["simulate", "vibrotouch", "--config", "{IN}", "--out",
+                                       "{OUT}/v.h5", "--no-progress"])]
+    for name, argv in deep:
+        d = add("deep-config", base / "cfg" / name, name, f"deep-{name}", "config", _deep)
+        case(d, argv[0], argv, REFUSE)
+    d = add("deep-scene", base / "chains" / "digit_press", "digit_press/scene.json",
+            "scene.json-deep", "scene",
+            lambda p: p.write_text('{"optics": ' + "[" * 2000 + "]" * 2000 + "}"))
+    d.entry = "digit_press"
+    case(d, "monitor", ["monitor", "{IN}", "--no-progress"], REFUSE)
+    for tag, text in (("nan", "0.1\n0.2\nnan\n0.1\n"), ("inf", "0.1\ninf\n"),
+                      ("1e400", "0.1\n1e400\n"), ("1e9", "1e9\n"),
+                      ("long-line", "0.1\n" + "9" * 2_000_000 + "\n"),
+                      ("long-tail", "0.1\n" + "9" * 2_000_000)):
+        d = add("live-stream", base / "annotations.csv", "s.txt", f"stream-{tag}", "raw",
+                lambda p, t=text: p.write_text(t))
+        case(d, "detect-contact", ["detect-contact", "{IN}", "--follow"], REFUSE)
+
+
+def _numbers(add, case, base: Path, REFUSE, EITHER) -> None:
+    """Tiny and huge values of the chain commands' numeric options (valid inputs)."""
+    h5 = "{BASE}/h5"
+    model = "{BASE}/chains/run_normals"
+    stream = ["features", "spectral", f"{h5}/taxel_scene.h5", "--stream", "pvdf_f0", "--out",
+              "{OUT}/f.h5"]
+    prep = ["accel-prepare", f"{h5}/accel.h5", "--out", "{OUT}/p.h5"]
+    hm = ["heightmap", f"{h5}/press.h5", "--model", model, "--trial", PRESS_TRIAL, "--workers",
+          "1", "--out", "{OUT}/h.h5"]
+    runs = [
+        ([*stream, "--hop-s", "1e-6"], REFUSE), ([*stream, "--window-s", "1e-6"], REFUSE),
+        ([*stream, "--window-s", "1e300"], REFUSE),
+        ([*prep, "--segment-s", "1e-6"], REFUSE), ([*prep, "--segment-s", "1e-300"], REFUSE),
+        ([*prep, "--segment-s", "1e300"], EITHER), ([*prep, "--cutoff-hz", "1e-9"], REFUSE),
+        ([*hm, "--px-per-mm", "1e308"], REFUSE), ([*hm, "--px-per-mm", "1e-308"], REFUSE),
+        ([*hm, "--workers", "100000"], REFUSE),
+        (["slip-signal", f"{h5}/heightmap.h5", "--workers", "100000"], REFUSE),
+        (["slip-signal", f"{h5}/heightmap.h5", "--scale", "1e300", "--n-static", "5"], EITHER),
+        (["monitor", f"{h5}/press.h5", "--hold-s", "1e300", "--n-static", "5"], EITHER),
+        (["detect-contact", f"{h5}/vibrotouch.h5", "--find-band", "--band-width", "1e300"],
+         REFUSE),
+    ]
+    for i, (argv, expect) in enumerate(runs):
+        d = add("chain-number", base / "annotations.csv", "unused", f"{argv[0]}-number-{i}",
+                "option", None)
+        case(d, argv[0], [*argv, "--no-progress"] if argv[0] in _PROGRESS else argv, expect)
+

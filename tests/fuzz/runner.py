@@ -214,6 +214,9 @@ def run_case(corpus: Corpus, case: Case, scratch: Path, *, timeout_s: int = 120)
                 kind, name = clash.split(":", 1)
                 if kind == "file":
                     (out / name).write_text("a file where a folder is expected\n")
+                elif kind == "ro":  # a folder nothing can be written in
+                    (out / name).mkdir()
+                    _immutable(out / name, True)
                 else:
                     (out / name).mkdir()
         writes_input = case.command in ("evaluate", "perturb") or (
@@ -242,7 +245,26 @@ def run_case(corpus: Corpus, case: Case, scratch: Path, *, timeout_s: int = 120)
                        outcome, res.code, round(res.seconds, 3), len(lines),
                        lines[0][:300] if lines else "", detail[:300])
     finally:
+        for clash in case.clash:
+            if clash.startswith("ro:"):
+                _immutable(work / "out" / clash[3:], False)
         shutil.rmtree(work, ignore_errors=True)
+
+
+def _immutable(folder: Path, on: bool) -> None:
+    """``chattr +i`` (root) and mode 0o555 (everyone else) on ``folder``, or both undone."""
+    import subprocess
+
+    if not folder.exists():
+        return
+    if on:
+        folder.chmod(0o555)
+    try:
+        subprocess.run(["chattr", "+i" if on else "-i", str(folder)], capture_output=True)
+    except OSError:
+        pass
+    if not on:
+        folder.chmod(0o755)
 
 
 def _sub(arg: str, subs: dict[str, str]) -> str:

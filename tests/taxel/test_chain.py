@@ -9,7 +9,12 @@ from sklearn.naive_bayes import GaussianNB
 from tactile_cli.errors import InputError
 from tactile_cli.spectral import band_grid
 from tactile_cli.store.trials import TactileFile
-from tactile_cli.taxel import FeatureConfig, SceneConfig, slip_interface, write_feature_stream
+from tactile_cli.taxel import (
+    FeatureConfig,
+    TaxelSceneConfig,
+    slip_interface,
+    write_taxel_features,
+)
 from tactile_cli.taxel.config import default_presets
 from tactile_cli.taxel.features import above_noise_floor, contact_taxels
 from tactile_cli.taxel.pipeline import (
@@ -35,13 +40,13 @@ def test_presets_follow_the_paper():
 
 def test_scene_config_refuses_unknown_keys():
     with pytest.raises(ValueError):
-        SceneConfig.model_validate({"trials": 3})
+        TaxelSceneConfig.model_validate({"trials": 3})
     with pytest.raises(ValueError):
         FeatureConfig.model_validate({"folds": 10, "bogus": 1})
 
 
 def test_trials_are_fixed_by_the_seed():
-    cfg = SceneConfig(trials_per_class=1)
+    cfg = TaxelSceneConfig(trials_per_class=1)
     a = simulate_trial(cfg, "capacitive", "hand", 0, 7)
     b = simulate_trial(cfg, "capacitive", "hand", 0, 7)
     c = simulate_trial(cfg, "capacitive", "hand", 0, 8)
@@ -136,7 +141,7 @@ def test_slip_interface_nested_accuracy(taxel_file):
 
 def test_feature_stream_is_readable(taxel_file, tmp_path):
     out = tmp_path / "features.h5"
-    res = write_feature_stream(taxel_file, out, FeatureConfig())
+    res = write_taxel_features(taxel_file, out, FeatureConfig())
     assert res.n_trials == 60 and "g2_multi_full" in res.channels
     with TactileFile(out) as tf:
         trial = tf.trial("capacitive_world_003")
@@ -148,14 +153,14 @@ def test_feature_stream_is_readable(taxel_file, tmp_path):
         assert ((sig.data >= 0) & (sig.data <= 1)).all()
         assert trial.labels["origin"] == "simulated"
     with pytest.raises(InputError, match="output exists"):
-        write_feature_stream(taxel_file, out, FeatureConfig())
+        write_taxel_features(taxel_file, out, FeatureConfig())
 
 
 def test_shipped_configs_repeat_the_defaults():
     from pathlib import Path
 
-    from tactile_cli.taxel import load_feature_config, load_scene_config
+    from tactile_cli.taxel import load_feature_config, load_taxel_scene_config
 
     root = Path(__file__).resolve().parents[2] / "configs"
     assert load_feature_config(root / "taxel_features.yaml") == FeatureConfig()
-    assert load_scene_config(root / "scene_taxel_slip.yaml") == SceneConfig()
+    assert load_taxel_scene_config(root / "scene_taxel_slip.yaml") == TaxelSceneConfig()

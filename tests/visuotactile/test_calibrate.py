@@ -18,7 +18,7 @@ from tactile_cli.visuotactile.calibrate import (
     normal_rmse,
     sphere_normals,
 )
-from tactile_cli.visuotactile.config import SceneConfig
+from tactile_cli.visuotactile.config import DigitSceneConfig
 from tactile_cli.visuotactile.render import GelOptics, render_reference, render_rgb
 from tactile_cli.visuotactile.shapes import ball_cap, contact_radius_px
 from tactile_cli.visuotactile.simulate import simulate_digit_press
@@ -28,7 +28,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _calibration_file(folder: Path, seed: int, presses: int, *, px_per_mm: bool = True) -> Path:
-    cfg = SceneConfig.model_validate({"calibration": {"presses": presses},
+    cfg = DigitSceneConfig.model_validate({"calibration": {"presses": presses},
                                       "trials": {"per_object": 0}})
     scene = folder / f"scene{seed}"
     simulate_digit_press(cfg, scene, seed=seed)

@@ -215,11 +215,11 @@ def test_hold_timer_is_not_moved_by_rounded_frame_times():
 def test_a_scene_folder_with_a_bad_px_per_mm_is_one_input_error(tmp_path, px):
     """Found by the damaged-input corpus: `tactile monitor SCENE` took optics.px_per_mm NaN
     from scene.json without a word (and a text value ended in a ValueError)."""
-    from tactile_cli.cli.monitor import _ingested
     from tactile_cli.errors import InputError
+    from tactile_cli.visuotactile.monitor_replay import frames_folder_plan
 
     (tmp_path / "trials").mkdir()
     (tmp_path / "scene.json").write_text('{"optics": {"px_per_mm": ' + px + '}}')
     with pytest.raises(InputError, match="px_per_mm") as err:
-        _ingested(tmp_path, tmp_path)
+        frames_folder_plan(tmp_path)
     assert "scene.json" in str(err.value) and "\n" not in str(err.value)

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.visuotactile.config import SceneConfig, load_scene_config
+from tactile_cli.visuotactile.config import DigitSceneConfig, load_digit_scene_config
 from tactile_cli.visuotactile.render import (
     GelOptics,
     render_reference,
@@ -40,8 +40,8 @@ SMALL = {
 }
 
 
-def small_config() -> SceneConfig:
-    return SceneConfig.model_validate(SMALL)
+def small_config() -> DigitSceneConfig:
+    return DigitSceneConfig.model_validate(SMALL)
 
 
 @pytest.fixture(scope="module")
@@ -234,7 +234,7 @@ def test_config_refuses_a_short_static_grip(tmp_path: Path) -> None:
     path = tmp_path / "c.yaml"
     path.write_text("trials:\n  static_s: [0.5, 1.0]\n")
     with pytest.raises(InputError, match="1.2 s"):
-        load_scene_config(path)
+        load_digit_scene_config(path)
 
 
 def test_help() -> None:
@@ -244,7 +244,8 @@ def test_help() -> None:
 
 def test_shipped_config_repeats_the_defaults() -> None:
     repo = Path(__file__).resolve().parents[2]
-    assert load_scene_config(repo / "configs" / "scene_digit_press.yaml") == SceneConfig()
+    shipped = load_digit_scene_config(repo / "configs" / "scene_digit_press.yaml")
+    assert shipped == DigitSceneConfig()
 
 
 def test_held_grip_drifts_slowly() -> None:

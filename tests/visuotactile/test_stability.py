@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tactile_cli.visuotactile.config import SceneConfig
+from tactile_cli.visuotactile.config import DigitSceneConfig
 from tactile_cli.visuotactile.stability import (
     LevelResult,
     breaking_points,
@@ -59,7 +59,7 @@ def test_breaking_point_is_the_first_broken_level_away_from_the_baseline():
 
 @pytest.fixture(scope="module")
 def tiny():
-    cfg = SceneConfig.model_validate(TINY)
+    cfg = DigitSceneConfig.model_validate(TINY)
     levels = {"noise": (2.0, 64.0), "drift": (0.5,), "step": (0.2,), "mesh": ((16, 12),)}
     return run_stability(cfg, [101], levels=levels), cfg, levels
 
@@ -96,4 +96,4 @@ def test_benchmark_quick_writes_png_and_json(tmp_path):
 
 def test_unknown_axis_is_refused_before_any_work():
     with pytest.raises(ValueError, match="names 'light'; axes are noise, drift, step, mesh"):
-        run_stability(SceneConfig.model_validate(TINY), [101], axes=["noise", "light"])
+        run_stability(DigitSceneConfig.model_validate(TINY), [101], axes=["noise", "light"])
