@@ -28,6 +28,7 @@ FLAGS: dict[str, Flag] = {
     "overwrite": "--overwrite",
     "name": "--name",
     "exported": "--exported FILE",
+    "shift_threshold_sd": "--shift-threshold",
     **BATCH_FLAGS,
 }
 
@@ -89,6 +90,11 @@ def evaluate_command(
                      "batch-1 latency (onnxruntime or TorchScript) is measured beside torch's.",
                      metavar="FILE", show_default=False),
     ] = None,
+    shift_threshold: Annotated[
+        float, typer.Option("--shift-threshold", help="Flag a channel whose mean in the "
+                            "evaluated data lies more than this many training standard "
+                            "deviations from the training data's.", metavar="SD")
+    ] = 1.0,
 ) -> None:
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
@@ -121,7 +127,7 @@ def evaluate_command(
             parse_threshold(threshold)  # a bad value fails before any work
         result = evaluate(run, files, split=split, name=name,  # type: ignore[arg-type]
                           latency=latency, threads=threads, overwrite=overwrite,
-                          exported=exported)
+                          exported=exported, shift_threshold_sd=shift_threshold)
         if as_json:
             payload = result.as_dict()
             if perturb:
@@ -136,13 +142,15 @@ def evaluate_command(
             console = Console(width=None if sys.stdout.isatty() else 120)
             print_metrics(console, result)
             console.print(cost_table(result))
+            for line in drift_lines(result):
+                console.print(line, highlight=False, soft_wrap=True)
             console.print(f"wrote {result.out_dir}")
             if perturb:
                 from .perturb import perturb_and_print
 
                 perturb_and_print([run], files, kinds=perturb_kinds, threshold=threshold,
                                   split=split, name=name, notes=False)
-        for note in [*result.notes, *result.warnings]:
+        for note in [*result.notes, *result.warnings, *drift_warnings(result)]:
             print(f"tactile: warning: {note}", file=sys.stderr)
         if result.overlaps_training and split == "all":
             print(f"tactile: warning: {', '.join(result.overlaps_training)} was used to train "
@@ -215,6 +223,53 @@ def cost_table(result: EvalResult) -> Table:
     cost.caption = (f"exported model: largest output difference from the run's "
                     f"{exp['max_abs_diff']:.2g} over {exp['n_windows']:,} windows{ratio}")
     return cost
+
+
+def drift_lines(result: EvalResult) -> list[str]:
+    """The input-shift and interleaving lines of an evaluation (:mod:`..learn.drift`)."""
+    from ..learn.drift import ChannelShift, ShiftReport
+
+    out = []
+    shift = result.extra.get("shift")
+    if shift:
+        report = ShiftReport(shift["threshold_sd"], shift["n_samples"],
+                             [ChannelShift(**c) for c in shift["channels"]])
+        what = "worst fold per channel" if shift.get("folds") else "evaluated data"
+        out.append(f"input shift ({what}): largest |shift| {shift['max_abs_shift_sd']:.2f} "
+                   f"training SD; {report.summary()}")
+    inter = result.extra.get("interleaving")
+    if inter:
+        if inter.get("interleaved") is None:
+            out.append(f"recording order: unknown ({inter.get('reason')})")
+        else:
+            inside = inter["n_inside_class_span"] if inter.get("n_inside_class_span") \
+                is not None else inter["n_inside_span"]
+            where = f" of their {inter['class_label']}" if inter.get("class_label") else ""
+            out.append(f"recording order (by {inter['order_by']}): {inside} of "
+                       f"{inter['n_evaluated']} evaluated trial(s) inside the span of the "
+                       f"training trials{where}"
+                       + (" (interleaved)" if inter["interleaved"] else " (not interleaved)"))
+    return out
+
+
+def drift_warnings(result: EvalResult) -> list[str]:
+    """The one-line warnings: interleaved trials, shifted channels."""
+    from ..learn.drift import ChannelShift, Interleaving, ShiftReport
+
+    out = []
+    inter = result.extra.get("interleaving")
+    if inter:
+        message = Interleaving(**{k: v for k, v in inter.items() if k != "folds"}).message()
+        if message:
+            out.append(message)
+    shift = result.extra.get("shift")
+    if shift and shift.get("flagged"):
+        report = ShiftReport(shift["threshold_sd"], shift["n_samples"],
+                             [ChannelShift(**c) for c in shift["channels"]])
+        out.append(report.summary() + "; the model sees levels it was not trained on "
+                   "(remove per-trial baselines or use level-free features: data.baseline, "
+                   "data.window_norm)")
+    return out
 
 
 def _pct(value: float | None) -> str:
