@@ -22,8 +22,8 @@ evaluation and export:
 - :func:`augment_windows` (``data.augment``, training only): per window and channel a level
   offset (``offset_sd``, in training standard deviations), a gain of the window's variation
   about its own mean (``gain_sd``, log-normal), a time stretch about the window's centre
-  (``time_stretch``: a factor drawn uniformly in ``1 +- time_stretch``, linear
-  interpolation, the edges held) and channel dropout (``channel_dropout``: the channel set
+  (``time_stretch``: a factor drawn uniformly in ``1 +- time_stretch``, band-limited FFT
+  resampling, the edges held) and channel dropout (``channel_dropout``: the channel set
   to 0, the training mean). Every draw comes from the ``numpy.random.Generator`` passed in,
   so a seed gives the same augmented batches.
 
@@ -115,20 +115,28 @@ def apply_gain(windows: np.ndarray, sd: float, rng: np.random.Generator) -> np.n
 
 
 def stretch_time(windows: np.ndarray, factors: np.ndarray) -> np.ndarray:
-    """(k, w, c) windows resampled about their centre by ``factors`` (k,): output sample
-    ``i`` is the input at ``(w - 1) / 2 + (i - (w - 1) / 2) * factor`` (linear
-    interpolation; positions outside the window take the edge sample). A factor above 1
-    shows more of the signal in the window (a faster slide), below 1 less (float32)."""
+    """(k, w, c) windows stretched in time about their centre by ``factors`` (k,): each
+    window is resampled band-limited (FFT, :func:`scipy.signal.resample`) to ``m =
+    round(w / factor)`` samples, so its content moves to ``factor`` times its frequency (a
+    factor above 1 is a faster slide), and the centre ``w`` samples are kept (when ``m <
+    w`` the edge samples are held outward). Linear interpolation would low-pass the window
+    by an amount that changes along it, which a spectrogram model reads as texture; the
+    FFT keeps the spectrum. A factor of 1 returns the window (float32)."""
+    from scipy.signal import resample  # lazy: scipy only when augmenting
+
     x = np.asarray(windows, dtype=np.float32)
     k, w, _ = x.shape
-    centre = (w - 1) / 2.0
-    pos = centre + (np.arange(w)[None, :] - centre) * np.asarray(factors, np.float64)[:, None]
-    pos = np.clip(pos, 0.0, w - 1.0)
-    lo = np.floor(pos).astype(np.int64)
-    hi = np.minimum(lo + 1, w - 1)
-    frac = (pos - lo)[:, :, None].astype(np.float32)
-    rows = np.arange(k)[:, None]
-    return (1.0 - frac) * x[rows, lo] + frac * x[rows, hi]
+    out = np.empty_like(x)
+    for j in range(k):  # one FFT per window: each has its own length
+        m = max(2, round(w / float(factors[j])))
+        if m == w:
+            out[j] = x[j]
+            continue
+        r = resample(x[j].astype(np.float64), m, axis=0)
+        shift = round((w - 1) / 2 * (w - m) / w)  # output i <- resampled i - shift
+        idx = np.clip(np.arange(w) - shift, 0, m - 1)
+        out[j] = r[idx]
+    return out
 
 
 def drop_channels(windows: np.ndarray, p: float, rng: np.random.Generator) -> np.ndarray:

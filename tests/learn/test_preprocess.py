@@ -95,10 +95,15 @@ def test_level_free_features_exact_and_blind_to_an_offset():
 def test_augmentations_exact_on_small_arrays():
     w = np.array([[[0.0, 1.0], [2.0, 1.0], [4.0, 1.0]]], np.float32)  # (1, 3, 2)
     np.testing.assert_array_equal(stretch_time(w, np.array([1.0])), w)
-    # factor 0.5 about the centre (index 1): positions 0.5, 1, 1.5
-    np.testing.assert_array_equal(stretch_time(w, np.array([0.5]))[0, :, 0], [1.0, 2.0, 3.0])
-    # factor 2: positions -1, 1, 3, held at the edges
-    np.testing.assert_array_equal(stretch_time(w, np.array([2.0]))[0, :, 0], [0.0, 2.0, 4.0])
+    # a band-limited sine of 4 cycles in 64 samples: half and twice its frequency
+    i = np.arange(64)
+    sine = np.sin(2 * np.pi * 4 * i / 64)[None, :, None].astype(np.float32)
+    np.testing.assert_allclose(stretch_time(sine, np.array([0.5]))[0, :, 0],
+                               np.sin(2 * np.pi * i / 32), atol=1e-5)
+    fast = stretch_time(sine, np.array([2.0]))[0, :, 0]  # 32 samples of content, centred
+    np.testing.assert_allclose(fast[16:48], np.sin(2 * np.pi * i[16:48] / 8), atol=1e-5)
+    np.testing.assert_allclose(fast[:16], 0.0, atol=1e-5)  # the edges held outward
+    np.testing.assert_allclose(fast[48:], np.sin(2 * np.pi * 31 / 8), atol=1e-5)
     rng = np.random.default_rng(3)
     off = add_offset(w, 0.5, np.random.default_rng(3))
     np.testing.assert_allclose(off - w, np.broadcast_to(rng.normal(0, 0.5, (1, 1, 2)),
