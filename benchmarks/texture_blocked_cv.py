@@ -15,7 +15,9 @@ materials x samples 1-10, each material's samples recorded one after another) an
 
 - ``stratified k2`` / ``stratified k5``: stratified by material (the protocol of issue 11);
 - ``blocked k2``: blocked by ``sample``: samples 1-5 against 6-10, both ways;
-- ``blocked k5``: blocked by ``sample``: pairs of samples (1-2, 3-4, ...), each held out once.
+- ``blocked k5``: blocked by ``sample``: pairs of samples (1-2, 3-4, ...), each held out once;
+- ``time k2``: blocked by the trials' start time within each material (the true recording
+  order: it differs from the sample numbers only where a sample was re-recorded later).
 
 fabric_slide (../shared/data/fabric_slide, configs/fabric_slide.yaml: 7 fabrics, forces
 120-250, speeds -150..150 mm/s, repetitions 0 and 1) and every ``configs/train_*fabric*.yaml``:
@@ -75,6 +77,8 @@ DATASETS: dict[str, dict[str, Any]] = {
             "blocked k2": ({"mode": "blocked", "by": "sample"}, 2),
             "stratified k5": ({"mode": "stratified", "by": "material"}, 5),
             "blocked k5": ({"mode": "blocked", "by": "sample"}, 5),
+            "time k2": ({"mode": "blocked", "by": "time_origin_unix_s", "within": "material"},
+                        2),
         },
     },
     "fabric": {

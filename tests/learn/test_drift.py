@@ -13,7 +13,13 @@ from tactile_cli.cli import app
 from tactile_cli.learn.config import parse_config
 from tactile_cli.learn.cv import train_cv
 from tactile_cli.learn.data import TrialSeries, fit_normalisation
-from tactile_cli.learn.drift import input_shift, interleaving, recording_record
+from tactile_cli.learn.drift import (
+    Interleaving,
+    input_shift,
+    interleaving,
+    pooled_interleaving,
+    recording_record,
+)
 from tactile_cli.learn.evaluate import evaluate
 from tactile_cli.learn.heads import HeadSpec
 from tactile_cli.learn.train import train
@@ -84,20 +90,20 @@ def test_interleaving_by_start_time_and_by_class():
 
 _CONFIG = {
     "seed": 0,
-    "data": {"stream": "finger", "channels": ["a", "b"], "window": 20, "stride": 10,
+    "data": {"stream": "finger", "channels": ["a", "b"], "window": 20, "stride": 20,
              "targets": [{"name": "material", "source": "trial"}],
              "split": {"mode": "stratified", "by": "material", "val_fraction": 0.0,
                        "test_fraction": 0.34}},
     "model": {"family": "mlp", "hidden": [8]},
-    "optim": {"lr": 0.01, "epochs": 2, "patience": 0, "batch_size": 64},
+    "optim": {"lr": 0.01, "epochs": 1, "patience": 0, "batch_size": 64},
 }
 
 
 @pytest.fixture(scope="module")
 def texture(tmp_path_factory):
     root = tmp_path_factory.mktemp("drift")
-    first = make_texture_file(root / "first.h5", seed=0)
-    later = make_texture_file(root / "later.h5", seed=1, first_sample=11,
+    first = make_texture_file(root / "first.h5", seed=0, duration_s=1.0)
+    later = make_texture_file(root / "later.h5", seed=1, first_sample=11, duration_s=1.0,
                               offset=(25.0, 0.0))  # channel a moved by ~25 counts
     return root, first, later
 
@@ -148,19 +154,28 @@ def test_cli_evaluate_reports_shift_and_interleaving(texture):
     assert bad.stderr.startswith("tactile: error: --shift-threshold must be a number > 0")
 
 
-def test_blocked_cross_validation_is_not_interleaved_and_stratified_is(texture):
+def test_blocked_cross_validation_reports_each_fold_against_its_own_training(texture):
     root, first, _ = texture
-    results = {}
-    for mode in ("stratified", "blocked"):
-        raw = {**_CONFIG, "data": {**_CONFIG["data"], "split": {
-            "mode": mode, "by": "sample" if mode == "blocked" else "material",
-            "val_fraction": 0.0}}}
-        run = root / f"cv_{mode}"
-        train_cv(parse_config(raw), [first], run, k=2, jobs=1, command="tests")
-        results[mode] = evaluate(run, None, latency=False, command="tests")
-    blocked = results["blocked"].extra["interleaving"]
-    assert blocked["interleaved"] is False and len(blocked["folds"]) == 2
-    assert results["stratified"].extra["interleaving"]["interleaved"] is True
-    shift = results["blocked"].extra["shift"]
-    assert [f["fold"] for f in shift["folds"]] == [0, 1]
-    assert results["blocked"].cv["mode"] == "blocked"
+    raw = {**_CONFIG, "data": {**_CONFIG["data"], "split": {
+        "mode": "blocked", "by": "sample", "val_fraction": 0.0}}}
+    run = root / "cv_blocked"
+    train_cv(parse_config(raw), [first], run, k=2, jobs=1, command="tests")
+    result = evaluate(run, None, latency=False, command="tests")
+    inter = result.extra["interleaving"]
+    assert inter["interleaved"] is False and inter["n_evaluated"] == 18
+    assert [(f["fold"], f["n_evaluated"], f["n_inside_class_span"]) for f in inter["folds"]] \
+        == [(0, 9, 0), (1, 9, 0)]
+    shift = result.extra["shift"]
+    assert [f["fold"] for f in shift["folds"]] == [0, 1] and shift["n_samples"] == 1800
+    assert result.cv is not None and result.cv["mode"] == "blocked"
+
+
+def test_pooled_interleaving_sums_the_folds_and_is_unknown_when_one_is():
+    a = Interleaving("time_origin_unix_s", 4, 3, "material", 2, True)
+    b = Interleaving("time_origin_unix_s", 5, 1, "material", 0, False)
+    pooled = pooled_interleaving([a, b], [0, 1])
+    assert (pooled.n_evaluated, pooled.n_inside_span, pooled.n_inside_class_span,
+            pooled.interleaved) == (9, 4, 2, True)
+    assert [f["fold"] for f in pooled.folds] == [0, 1]
+    unknown = pooled_interleaving([a, Interleaving(None, 2, reason="no order")], [0, 1])
+    assert unknown.interleaved is None and unknown.reason == "no order"
