@@ -220,8 +220,7 @@ def _blocked_split(trials: Sequence[SplitTrial], split: SplitConfig, by: str
             else:
                 n_test -= 1
                 warnings.append(f"{by} has {len(values)} value(s){where}: none left for test")
-        if split.within is None and n_test + n_val == 0 and \
-                (split.test_fraction > 0 or split.val_fraction > 0):
+        if split.within is None and n_test == 0 and split.test_fraction > 0:
             raise InputError(f"label {by!r} has {len(values)} value(s): a blocked split needs "
                              "at least 2 (one for training and one held out)")
         for pos, (_, members) in enumerate(reversed(values)):

@@ -103,6 +103,15 @@ def test_blocked_errors_and_warnings():
     with pytest.raises(InputError, match="trial has no start time"):
         cv_folds(_slides(2, 4), SplitConfig(mode="blocked", by="time_origin_unix_s"), seed=0,
                  k=2)
+    # two values, two folds: no block is left to validate on, and that is said
+    plan = cv_folds(_slides(2, 2), SplitConfig(mode="blocked", by="sample", val_fraction=0.2),
+                    seed=0, k=2)
+    assert [f.assignment.counts() for f in plan.folds] == \
+        [{"train": 2, "val": 0, "test": 2}] * 2
+    assert plan.folds[0].assignment.warnings == ("sample has 1 value(s): none left for val",)
+    with pytest.raises(InputError, match="label 'sample' has 1 value"):
+        assign_splits(_slides(2, 1), SplitConfig(mode="blocked", by="sample",
+                                                 test_fraction=0.2), seed=0)
     uneven = _slides(1, 4) + [_trial("rare_1", material="rare", sample="1")]
     plan = cv_folds(uneven, SplitConfig(mode="blocked", by="sample", within="material",
                                         val_fraction=0.0), seed=0, k=2)
