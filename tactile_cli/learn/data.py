@@ -689,7 +689,7 @@ def summary_features(windows: np.ndarray, names: Sequence[str] = SUMMARY_FEATURE
         centred = x - x.mean(axis=1, keepdims=True)
         var = (centred**2).mean(axis=1)
         m = (centred**order).mean(axis=1)
-        ok = var > 0
+        ok = (x.max(axis=1) > x.min(axis=1)) & (var > 0)  # constant: 0 (see models._moment)
         out = np.divide(m, np.where(ok, var, 1.0) ** (order / 2), out=np.zeros_like(m),
                         where=ok)
         return out - 3.0 * ok if order == 4 else out

@@ -188,10 +188,12 @@ class SummaryFeatures(nn.Module):
 
 def _moment(x: Tensor, order: int) -> Tensor:
     """(B, W, C) -> (B, C) skewness (order 3) or excess kurtosis (order 4) over the window;
-    0 where a channel has no spread."""
+    0 where a channel is constant over the window (tested on its range: the float32 mean
+    of equal values can differ from them by a rounding step, and that step's moments are
+    noise)."""
     centred = x - x.mean(dim=1, keepdim=True)
     var = (centred**2).mean(dim=1)
-    ok = var > 0
+    ok = (x.amax(dim=1) > x.amin(dim=1)) & (var > 0)
     m = (centred**order).mean(dim=1) / torch.where(ok, var, torch.ones_like(var)) ** (order / 2)
     if order == 4:
         m = m - 3.0

@@ -219,7 +219,10 @@ def _set_feature_stats(model: MultiTaskNet, ws: WindowSet, norm: Normalisation) 
             feats.append(summary.raw(torch.from_numpy(ws.windows(idx))).double())
     f = torch.cat(feats)
     mean, std = f.mean(dim=0), f.std(dim=0, correction=0)
-    std = torch.where(torch.isfinite(std) & (std > 0), std, torch.ones_like(std))
+    # a feature constant up to float rounding (the std of z-scored windows: 1 +- 1e-7) is
+    # constant: dividing by that spread would blow the rounding up into large inputs
+    varies = torch.isfinite(std) & (std > 1e-5 * mean.abs().clamp(min=1.0))
+    std = torch.where(varies, std, torch.ones_like(std))
     summary.feature_mean.copy_(mean.float())
     summary.feature_std.copy_(std.float())
     norm.features = {"names": list(summary.features), "mean": mean.tolist(),
