@@ -38,10 +38,11 @@ stratified minus blocked at the same k (the baseline is in the same run).
 
     .venv/bin/python benchmarks/texture_blocked_cv.py [--datasets biotac fabric]
         [--configs SUBSTRING...] [--protocols NAME...] [--work DIR] [--bt-data FILE]
-        [--fabric-data FILE] [--jobs N] [--json]
+        [--fabric-data FILE] [--jobs N] [--finished-only] [--json]
 
 Writes benchmarks/figures/texture_blocked_cv.json. ``--work DIR`` keeps the ingested files
-and the run folders; a second call reuses finished runs (same config and data).
+and the run folders; a second call reuses finished runs (same config and data), and
+``--finished-only`` reports those without training the rest.
 """
 
 from __future__ import annotations
@@ -112,11 +113,15 @@ def _config_with_split(path: Path, split: dict[str, Any]) -> Any:
     return parse_config(raw)
 
 
+def run_dir(work: Path, cfg_path: Path, protocol: str) -> Path:
+    return work / "runs" / f"{cfg_path.stem}__{protocol.replace(' ', '_')}"
+
+
 def run_protocol(cfg_path: Path, protocol: str, split: dict[str, Any], k: int, data: Path,
                  work: Path, jobs: int | None) -> dict[str, Any]:
     """Cross-validate ``cfg_path`` under one protocol and read its evaluation."""
     config = _config_with_split(cfg_path, split)
-    run = work / "runs" / f"{cfg_path.stem}__{protocol.replace(' ', '_')}"
+    run = run_dir(work, cfg_path, protocol)
     started = time.perf_counter()
     trained = False
     if not (run / runs.RUN_JSON).is_file():
@@ -168,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fabric-data", type=Path, default=None, help="ingested fabric_slide.h5")
     ap.add_argument("--work", type=Path, default=None, help="keep ingests and runs here")
     ap.add_argument("--jobs", type=int, default=1, help="folds trained side by side")
+    ap.add_argument("--finished-only", action="store_true",
+                    help="report the runs already in --work, train none")
     ap.add_argument("--json", action="store_true", help="print the record as JSON")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "figures")
     args = ap.parse_args(argv)
@@ -189,6 +196,9 @@ def main(argv: list[str] | None = None) -> int:
             for cfg in configs:
                 for protocol, (split, k) in spec["protocols"].items():
                     if args.protocols and protocol not in args.protocols:
+                        continue
+                    if args.finished_only and \
+                            not (run_dir(work, cfg, protocol) / runs.RUN_JSON).is_file():
                         continue
                     row = run_protocol(cfg, protocol, split, k, data, work, args.jobs)
                     rows.append({"dataset": name, **row})
