@@ -24,6 +24,7 @@ FLAGS: dict[str, Flag] = {
     "exported": "--exported FILE",
     "perturb": "--perturb",
     "threads": "--threads",
+    "shift_threshold_sd": "--shift-threshold",
     **BATCH_FLAGS,
 }
 
@@ -85,6 +86,11 @@ def evaluate_command(
                      "batch-1 latency (onnxruntime or TorchScript) is measured beside torch's.",
                      metavar="FILE", show_default=False),
     ] = None,
+    shift_threshold: Annotated[
+        float, typer.Option("--shift-threshold", help="Flag a channel whose mean in the "
+                            "evaluated data lies more than this many training standard "
+                            "deviations from the training data's.", metavar="SD")
+    ] = 1.0,
 ) -> None:
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
@@ -106,7 +112,8 @@ def evaluate_command(
         kinds = [k for k in perturb_kinds.split(",") if k.strip()] if perturb else None
         result = evaluate_run(run, files, split=split, name=name,  # type: ignore[arg-type]
                               latency=latency, threads=threads, overwrite=overwrite,
-                              exported=exported, perturb=kinds, threshold=threshold)
+                              exported=exported, perturb=kinds, threshold=threshold,
+                              shift_threshold_sd=shift_threshold)
         if as_json:
             echo_json(result.as_dict())
         else:

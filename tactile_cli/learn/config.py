@@ -55,6 +55,13 @@ from ..vocabulary import BIN_S, CHANNEL_SETS
 
 #: Summary features of the MLP family, in the order they are computed (per channel).
 SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope")
+#: Summary features that do not read the window's level (issue 34): ``range`` (max - min),
+#: ``diff_std`` (standard deviation of the sample-to-sample differences), ``skew`` and
+#: ``kurtosis`` (excess; both 0 for a window without spread). With ``std`` and ``slope``
+#: they are unchanged by an offset added to the channel.
+LEVEL_FREE_FEATURES: tuple[str, ...] = ("range", "diff_std", "skew", "kurtosis")
+#: Every name ``model.features`` accepts.
+FEATURE_NAMES: tuple[str, ...] = SUMMARY_FEATURES + LEVEL_FREE_FEATURES
 #: Model families of the registry (``model.family``).
 FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp")
 
@@ -88,18 +95,30 @@ class SplitConfig(_Model):
     """How trials (never windows) are divided into train, val and test, and into the folds
     of ``tactile train --cv`` (see :mod:`.splits`)."""
 
-    mode: Literal["auto", "attribute", "random", "stratified", "group"] = "auto"
+    mode: Literal["auto", "attribute", "random", "stratified", "group", "blocked"] = "auto"
     """``attribute``: each trial's ``split`` attribute (train/val/test; ``tactile ingest
     --trial-labels`` column ``split`` or ``tactile train --split-from CSV`` sets it);
     ``random``: seeded by trial with the fractions below; ``stratified``: the same, per
     class of the label ``by``, so that every class is in every split where it has enough
     trials; ``group``: whole groups of trials sharing the value of label ``by`` (a day, an
-    object, a session) go to one side; ``auto``: the attribute when every trial has one,
-    random when none has."""
+    object, a session) go to one side; ``blocked``: trials in recording order (the order
+    of label ``by``: a sample number, a session, or ``time_origin_unix_s``, the trial's
+    start time) cut into contiguous blocks, the latest blocks to test and the ones before
+    them to val, so that no held-out trial lies between two training trials (the split
+    that predicts accuracy on later recordings; see :mod:`.splits`); ``auto``: the
+    attribute when every trial has one, random when none has."""
     by: str | None = Field(default=None, min_length=1)
     """Label that ``stratified`` and ``group`` use: a trial label, or a per-sample label
     (a trial's class is then the set of classes its samples hold, e.g. ``no_slip`` or
-    ``no_slip+slip``). Default for ``stratified``: the first classification target."""
+    ``no_slip+slip``). Default for ``stratified``: the first classification target. For
+    ``blocked``: the label whose natural order is the recording order (numbers by value),
+    or ``time_origin_unix_s`` (a trial label of that name, else the trial attribute the
+    mapped-CSV ingest writes)."""
+    within: str | None = Field(default=None, min_length=1)
+    """``blocked`` only: cut the blocks inside each value of this label (a class, a
+    material), so that every fold holds the same stretch of every class's recordings
+    (e.g. ``by: time_origin_unix_s, within: material`` when materials were recorded one
+    after another)."""
     val_fraction: float = Field(default=0.2, ge=0, lt=1)
     test_fraction: float = Field(default=0.0, ge=0, lt=1)
     seed: int | None = Field(default=None, ge=0, le=_MAX_SEED)
@@ -114,7 +133,47 @@ class SplitConfig(_Model):
             )
         if self.mode == "group" and self.by is None:
             raise ValueError("`mode: group` needs `by`: the label whose trials stay together")
+        if self.mode == "blocked" and self.by is None:
+            raise ValueError("`mode: blocked` needs `by`: the label that gives the recording "
+                             "order (a sample number, or time_origin_unix_s)")
+        if self.within is not None and self.mode != "blocked":
+            raise ValueError("`within` goes with `mode: blocked` only")
         return self
+
+
+class BaselineConfig(_Model):
+    """Per-trial baseline removal (:func:`.preprocess.remove_baseline`): every channel of a
+    trial minus its resting level, as BioTac and taxel users subtract resting electrode and
+    pressure values, so that a model sees changes, not a session's absolute level."""
+
+    mode: Literal["none", "start", "median"] = "none"
+    """``start``: the mean of the trial's first ``duration_ms`` (the resting level before
+    contact when the recording starts before it; causal); ``median``: the trial's median
+    (needs the whole trial: offline evaluation only); ``none``: nothing removed."""
+    duration_ms: float = Field(default=100.0, gt=0, le=3.6e6)
+    """``start``: how much of the trial's beginning is the resting level (at least its
+    first sample)."""
+
+
+class AugmentConfig(_Model):
+    """Augmentation of the training windows (:func:`.preprocess.augment_windows`), drawn
+    per window and channel from a generator seeded by the run's ``seed``; all 0: none."""
+
+    offset_sd: float = Field(default=0.0, ge=0, le=100)
+    """Standard deviation of a level offset added to each channel of each window, in
+    training standard deviations (the normalised unit)."""
+    gain_sd: float = Field(default=0.0, ge=0, le=10)
+    """Standard deviation of the log of a gain applied to each channel's variation about its
+    window mean (0.1: gains of about 0.9 to 1.1)."""
+    time_stretch: float = Field(default=0.0, ge=0, lt=1)
+    """Largest relative time stretch of a window (0.05: factors 0.95 to 1.05, uniform)."""
+    channel_dropout: float = Field(default=0.0, ge=0, lt=1)
+    """Probability that a channel of a window is set to 0 (the training mean)."""
+
+    @property
+    def active(self) -> bool:
+        return any(v > 0 for v in (self.offset_sd, self.gain_sd, self.time_stretch,
+                                   self.channel_dropout))
 
 
 class DataConfig(_Model):
@@ -167,17 +226,24 @@ class DataConfig(_Model):
     visible (event counts span three decades within one trial)."""
     normalise: bool = True
     """Per-channel standardisation with statistics from the training split only."""
-    window_norm: Literal["none", "center_scale"] = "none"
+    window_norm: Literal["none", "center_scale", "center", "zscore"] = "none"
     """Applied to every window after ``normalise``: ``center_scale`` removes each channel's
     mean over the window and divides by its largest absolute value, so every channel of
     every window spans [-1, 1] (paper 001, sec. 4: the network sees the shape of a
-    vibration, not its amplitude; a channel that is constant over the window becomes 0)."""
+    vibration, not its amplitude; a channel that is constant over the window becomes 0);
+    ``center`` only removes the window's mean (the level goes, the amplitude stays);
+    ``zscore`` also divides by the window's standard deviation (see
+    :mod:`.preprocess`)."""
     class_weights: bool = True
     """Weight each classification loss by inverse class frequency in the training split."""
     split: SplitConfig = SplitConfig()
     boundary_margin: int = Field(default=1, ge=0, le=_MAX_SAMPLES)
     """Evaluation also reports accuracy without the windows whose target sample is within
     this many samples of a change of its sample label."""
+    baseline: BaselineConfig = BaselineConfig()
+    """Per-trial baseline removal before ``transform`` and normalisation (default none)."""
+    augment: AugmentConfig = AugmentConfig()
+    """Augmentation of the training windows (default none); evaluation never augments."""
 
     @model_validator(mode="after")
     def _check(self) -> DataConfig:
@@ -259,9 +325,12 @@ class MlpConfig(_Family):
 
     family: Literal["mlp"]
     hidden: list[_Width] = Field(default=[64, 64], min_length=1, max_length=_MAX_LIST)
-    features: list[Literal["mean", "std", "min", "max", "last", "slope"]] = Field(
+    features: list[Literal["mean", "std", "min", "max", "last", "slope", "range", "diff_std",
+                           "skew", "kurtosis"]] = Field(
         default=list(SUMMARY_FEATURES), min_length=1
     )
+    """Per-channel summary features (:data:`SUMMARY_FEATURES`, and the level-free
+    :data:`LEVEL_FREE_FEATURES`); default the six of :data:`SUMMARY_FEATURES`."""
 
 
 ModelConfig = Annotated[
@@ -444,6 +513,7 @@ def _key_path(keys: tuple[Any, ...]) -> str:
 
 _ALLOWED: dict[tuple[str, ...], type[BaseModel]] = {
     (): TrainConfig, ("data",): DataConfig, ("optim",): OptimConfig,
+    ("data", "baseline"): BaselineConfig, ("data", "augment"): AugmentConfig,
     ("data", "split"): SplitConfig, ("data", "targets"): TargetConfig,
 }
 _FAMILY_MODELS: dict[str, type[BaseModel]] = {
@@ -477,6 +547,7 @@ def _describe(err: dict[str, Any], keys: tuple[Any, ...]) -> str:
     return f"`{key}`: {msg}{shown}"
 
 
-__all__ = ["FAMILIES", "SUMMARY_FEATURES", "Cnn1dConfig", "Cnn2dSpectrogramConfig",
+__all__ = ["FAMILIES", "FEATURE_NAMES", "LEVEL_FREE_FEATURES", "SUMMARY_FEATURES",
+           "AugmentConfig", "BaselineConfig", "Cnn1dConfig", "Cnn2dSpectrogramConfig",
            "DataConfig", "FnnConfig", "LstmConfig", "MlpConfig", "ModelConfig", "OptimConfig",
            "SplitConfig", "TargetConfig", "TrainConfig", "load_config", "parse_config"]

@@ -67,6 +67,13 @@ from .data import (
     read_trials,
     resolve_channels,
 )
+from .drift import (
+    SHIFT_THRESHOLD_SD,
+    input_shift,
+    interleaving,
+    pooled_interleaving,
+    pooled_shift,
+)
 from .heads import primary_head
 from .inputs import checked_input, input_record
 from .metrics import (
@@ -379,8 +386,11 @@ def evaluate_cv(
     command: str | None = None,
     overwrite: bool = False,
     split: Literal["all", "test"] = "all",
+    shift_threshold_sd: float = SHIFT_THRESHOLD_SD,
 ) -> EvalResult:
     """Evaluate every fold's model on its held-out trials and pool them (module docstring).
+    The input shift and interleaving of :mod:`.drift` are taken fold by fold (each fold's
+    held-out trials against its own training split) and pooled.
 
     ``data_paths``: the run's training files (default: the paths in its run.json); other
     data are refused, since the folds are defined on those trials. ``split`` is accepted for
@@ -424,6 +434,7 @@ def evaluate_cv(
     fold_rows: list[dict[str, Any]] = []
     model0 = None
     ws0 = None
+    shifts, inter = [], []
     for fold, run in zip(cv["folds"], fold_runs, strict=True):
         held = [trials[index[k]] for k in fold["test"] if k in index]
         if len(held) != len(fold["test"]):
@@ -431,6 +442,9 @@ def evaluate_cv(
             raise InputError(f"held-out trial {missing} of fold {fold['fold']} is not in the "
                              "data", path=paths[0])
         ws = make_windows(held, run.config.data, run.heads, run.normalisation)
+        shifts.append(input_shift(held, run.config.data, run.normalisation,
+                                  threshold_sd=shift_threshold_sd))
+        inter.append(interleaving(held, run.info.get("recording_order")))
         model = run.load_model()
         out = predict(model, ws)
         for h in run.heads:  # regression values back to their units, fold by fold
@@ -461,6 +475,7 @@ def evaluate_cv(
         notes = [*notes, "a cross-validated run is always scored on each fold's held-out "
                  "trials; `split='test'` changes nothing"]
     lat = measure_latency_of(model0, ws0, threads) if latency else None
+    fold_ids = [int(f["fold"]) for f in cv["folds"]]
     result = EvalResult(
         run=str(run_path), family=cfg.model.family, name=name, split="cv",
         data=data_records(paths, trials), overlaps_training=[],
@@ -469,7 +484,9 @@ def evaluate_cv(
         file_size_bytes=(first.path / runs.MODEL_PT).stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, first.input), notes=notes,
-        cv=cv_record, origin=data_origin(paths))
+        cv=cv_record, origin=data_origin(paths),
+        extra={"shift": pooled_shift(shifts, fold_ids).as_dict(),
+               "interleaving": pooled_interleaving(inter, fold_ids).as_dict()})
     write_eval(result, first.heads, pooled, decoded, {}, overwrite=overwrite)
     return result
 

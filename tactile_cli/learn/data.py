@@ -45,8 +45,9 @@ import numpy as np
 from ..errors import InputError
 from ..natural import natural_key
 from ..store.trials import TactileFile, Trial
-from .config import SUMMARY_FEATURES, DataConfig, TargetConfig
+from .config import SUMMARY_FEATURES, BaselineConfig, DataConfig, TargetConfig
 from .heads import HeadSpec
+from .preprocess import normalise_windows, remove_baseline
 from .splits import SPLITS, SplitAssignment, assign_splits
 
 
@@ -79,6 +80,10 @@ class TrialSeries:
     sample_period_s: float = math.nan
     channel_names: tuple[str, ...] = ()
     channel_units: tuple[str, ...] = ()
+    time_origin_unix_s: float | None = None
+    """The trial's start time (Unix seconds; its ``time_origin_unix_s`` attribute), the
+    recording order of ``split: {mode: blocked, by: time_origin_unix_s}`` and of the
+    interleaving check of ``tactile evaluate``; None when the file records none."""
 
     @property
     def key(self) -> str:
@@ -207,7 +212,8 @@ def _read_trial(trial: Trial, data: DataConfig, sample_targets: list[str], train
         return TrialSeries(str(path), trial.name, trial.split,
                            np.ascontiguousarray(signal.data, dtype=np.float32), signal.t_s,
                            labels, classes, trial.labels, "signal", sensor.name,
-                           signal.sample_period_s, tuple(data.channels), signal.channel_units)
+                           signal.sample_period_s, tuple(data.channels), signal.channel_units,
+                           _time_origin(trial))
     if data.stream == "event_counts" and trial.has_events:
         return _count_events(trial, data, sample_targets)
     hint = " and no events to count" if data.stream == "event_counts" else ""
@@ -248,7 +254,17 @@ def _count_events(trial: Trial, data: DataConfig, sample_targets: list[str]) -> 
     return TrialSeries(str(path), name, trial.split, x, counts.t_s.astype(np.float64), labels,
                        classes, trial.labels, "events", trial.events.sensor_name,
                        float(counts.bin_s), tuple(data.channels),
-                       ("events/bin",) * len(data.channels))
+                       ("events/bin",) * len(data.channels), _time_origin(trial))
+
+
+def _time_origin(trial: Trial) -> float | None:
+    """The trial attribute ``time_origin_unix_s`` as a finite float, else None."""
+    value = trial.attrs.get("time_origin_unix_s")
+    try:
+        out = float(value) if value is not None else math.nan
+    except (TypeError, ValueError):
+        return None
+    return out if math.isfinite(out) else None
 
 
 # -- heads and targets -----------------------------------------------------------------------
@@ -425,12 +441,24 @@ def transform_samples(x: np.ndarray, transform: str) -> np.ndarray:
     raise ValueError(f"`transform` (={transform!r}) must be none or signed_log1p")
 
 
+def trial_samples(trial: TrialSeries, baseline: BaselineConfig | None = None) -> np.ndarray:
+    """(n, c) float32 samples of a trial in sensor units, minus its resting level when
+    ``baseline`` (``data.baseline``) asks for it (:func:`.preprocess.remove_baseline`)."""
+    if baseline is None or baseline.mode == "none":
+        return trial.x
+    return remove_baseline(trial.x, trial.t_s, mode=baseline.mode,
+                           duration_ms=baseline.duration_ms)
+
+
 def fit_normalisation(train: Sequence[TrialSeries], channels: Sequence[str], *,
-                      enabled: bool = True, transform: str = "none") -> Normalisation:
-    """Per-channel mean and std over every (transformed) sample of the training trials."""
+                      enabled: bool = True, transform: str = "none",
+                      baseline: BaselineConfig | None = None) -> Normalisation:
+    """Per-channel mean and std over every (baseline-removed, transformed) sample of the
+    training trials."""
     if not train:
         raise InputError("no training trials to take normalisation statistics from")
-    x = transform_samples(np.concatenate([t.x for t in train], axis=0), transform)
+    x = transform_samples(np.concatenate([trial_samples(t, baseline) for t in train], axis=0),
+                          transform)
     mean = x.mean(axis=0)
     std = x.std(axis=0)
     std = np.where(np.isfinite(std) & (std > 0), std, 1.0)
@@ -480,7 +508,19 @@ class WindowSet:
         """(k, window, c) float32 windows ``idx`` (all when None)."""
         starts = self.starts if idx is None else self.starts[idx]
         out = self.x[starts[:, None] + np.arange(self.window)]
-        return center_scale(out) if self.window_norm == "center_scale" else out
+        return self.normalise(out)
+
+    def raw_windows(self, idx: np.ndarray | slice | None = None) -> np.ndarray:
+        """(k, window, c) float32 windows ``idx`` before the per-window normalisation
+        (what training augments before :meth:`normalise`)."""
+        starts = self.starts if idx is None else self.starts[idx]
+        return self.x[starts[:, None] + np.arange(self.window)]
+
+    def normalise(self, windows: np.ndarray) -> np.ndarray:
+        """The per-window normalisation ``window_norm`` of (k, window, c) windows."""
+        if self.window_norm == "center_scale":
+            return center_scale(windows)
+        return normalise_windows(windows, self.window_norm)
 
     def subset(self, mask: np.ndarray) -> WindowSet:
         """The windows where ``mask`` (n_windows,) is true (sharing ``x``)."""
@@ -538,7 +578,7 @@ def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequenc
     offset = 0
     for i, trial in enumerate(trials):
         n = trial.x.shape[0]
-        raw = trial.x
+        raw = trial_samples(trial, data.baseline)
         if pad:
             filler = np.zeros((pad, raw.shape[1]), np.float32) if data.pad == "zero" \
                 else np.repeat(raw[:1], pad, axis=0)
@@ -645,10 +685,23 @@ def summary_features(windows: np.ndarray, names: Sequence[str] = SUMMARY_FEATURE
     w = x.shape[1]
     idx = np.arange(w, dtype=np.float64) - (w - 1) / 2
     denom = float((idx**2).sum()) or 1.0
+    def moment(order: int) -> np.ndarray:
+        centred = x - x.mean(axis=1, keepdims=True)
+        var = (centred**2).mean(axis=1)
+        m = (centred**order).mean(axis=1)
+        ok = (x.max(axis=1) > x.min(axis=1)) & (var > 0)  # constant: 0 (see models._moment)
+        out = np.divide(m, np.where(ok, var, 1.0) ** (order / 2), out=np.zeros_like(m),
+                        where=ok)
+        return out - 3.0 * ok if order == 4 else out
+
     funcs = {
         "mean": lambda: x.mean(axis=1), "std": lambda: x.std(axis=1),
         "min": lambda: x.min(axis=1), "max": lambda: x.max(axis=1),
         "last": lambda: x[:, -1], "slope": lambda: np.einsum("kwc,w->kc", x, idx) / denom,
+        "range": lambda: x.max(axis=1) - x.min(axis=1),
+        "diff_std": lambda: np.diff(x, axis=1).std(axis=1) if w > 1
+        else np.zeros((x.shape[0], x.shape[2])),
+        "skew": lambda: moment(3), "kurtosis": lambda: moment(4),
     }
     return np.concatenate([funcs[n]() for n in names], axis=1).astype(np.float32)
 
@@ -657,5 +710,6 @@ __all__ = ["SPLITS", "Normalisation", "SplitAssignment", "TrialSeries",
            "WindowSet", "assign_splits", "center_scale", "check_heads_match", "class_weights",
            "data_files",
            "fit_normalisation", "make_windows", "per_sample_targets", "read_trials",
+           "trial_samples",
            "regression_stats", "resolve_heads", "summary_features", "transform_samples",
            "window_ends"]

@@ -21,6 +21,7 @@ head and ``predictions.csv`` (one row per window).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Literal
@@ -31,6 +32,7 @@ from ..store.provenance import current_command, utc_now
 from . import runs
 from .cv import evaluate_cv
 from .data import check_heads_match, data_files, make_windows, read_trials
+from .drift import SHIFT_THRESHOLD_SD, input_shift, interleaving
 from .inputs import checked_input, input_record
 from .metrics import (
     ClassificationMetrics,
@@ -63,6 +65,7 @@ def evaluate(
     command: str | None = None,
     overwrite: bool = False,
     exported: str | Path | None = None,
+    shift_threshold_sd: float = SHIFT_THRESHOLD_SD,
 ) -> EvalResult:
     """Evaluate a run on data files and write ``RUN/eval/<name>/`` (an existing evaluation
     of that name is an error unless ``overwrite``; the folder is written atomically).
@@ -79,14 +82,22 @@ def evaluate(
     ``exported``: a file ``tactile export`` wrote from this run; its outputs on the same
     windows are compared with the run's and its batch-1 latency (onnxruntime or TorchScript)
     is measured beside torch's (metrics.json key ``exported``, :func:`.export.check_exported`).
+
+    Beside the metrics, metrics.json records the input shift of the evaluated trials against
+    the training split per channel (key ``shift``; channels beyond ``shift_threshold_sd``
+    training standard deviations flagged) and whether they are interleaved in recording
+    order with the trials the run learned from (key ``interleaving``; :mod:`.drift`).
     """
+    if not (math.isfinite(shift_threshold_sd) and shift_threshold_sd > 0):
+        raise InputError(f"`shift_threshold_sd` must be a number > 0, got {shift_threshold_sd}")
     info = runs.read_run_info(Path(run_dir))
     if info.get("cv") is not None:
         if exported is not None:
             raise InputError("`exported` needs one model: give a fold's folder "
                              "(RUN/folds/fold_00) of the cross-validated run", path=run_dir)
         return evaluate_cv(run_dir, data_paths, name=name, latency=latency, threads=threads,
-                           command=command, overwrite=overwrite, split=split)
+                           command=command, overwrite=overwrite, split=split,
+                           shift_threshold_sd=shift_threshold_sd)
     if not data_paths:
         raise InputError("no data files; give `data_paths`")
     run = runs.load_run(run_dir)
@@ -115,7 +126,11 @@ def evaluate(
     metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
                                     cfg.data.boundary_margin)
     lat = measure_latency_of(model, ws, threads) if latency else None
-    extra: dict[str, Any] = {}
+    extra: dict[str, Any] = {
+        "shift": input_shift(trials, cfg.data, run.normalisation,
+                             threshold_sd=shift_threshold_sd).as_dict(),
+        "interleaving": interleaving(trials, run.info.get("recording_order")).as_dict(),
+    }
     if exported is not None:
         from .export import check_exported, raw_windows
 

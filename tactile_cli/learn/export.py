@@ -94,6 +94,7 @@ class DeployedModel(nn.Module):
         self.signed_log1p = norm.transform == "signed_log1p"
         self.normalise = bool(norm.enabled)
         self.center_scale = window_norm == "center_scale"
+        self.window_norm = window_norm
         self.register_buffer("channel_mean", torch.as_tensor(norm.mean, dtype=torch.float64))
         self.register_buffer("channel_std", torch.as_tensor(norm.std, dtype=torch.float64))
         scale = [norm.targets.get(h.name, (0.0, 1.0)) for h in self.heads]
@@ -115,6 +116,15 @@ class DeployedModel(nn.Module):
             ok = varies & (peak > 0)
             z = torch.where(ok, z / torch.where(ok, peak, torch.ones_like(peak)),
                             torch.zeros_like(z))
+        elif self.window_norm in ("center", "zscore"):  # as .preprocess.normalise_windows
+            varies = z.amax(dim=1, keepdim=True) > z.amin(dim=1, keepdim=True)
+            z = z - z.mean(dim=1, keepdim=True)
+            if self.window_norm == "zscore":
+                sd = torch.sqrt((z.to(torch.float64) ** 2).mean(dim=1, keepdim=True))
+                sd = sd.to(torch.float32)
+                ok = varies & (sd > 0)
+                z = z / torch.where(ok, sd, torch.ones_like(sd))
+            z = torch.where(varies, z, torch.zeros_like(z))
         return z
 
     def forward(self, x: Tensor) -> tuple[Tensor, ...]:
@@ -271,7 +281,7 @@ def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) ->
                      + ("zeros" if d.pad == "zero" else "the first sample"
                         if d.pad != "none" else "nothing (no window until it is full)")
                      + f". The outputs are for the sample `label_delay` (={d.label_delay}) "
-                     "samples before the newest."),
+                     "samples before the newest." + _baseline_note(d.baseline)),
         },
         "preprocessing": {
             "inside_model": True, "transform": run.normalisation.transform,
@@ -279,6 +289,8 @@ def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) ->
                               "mean": [float(v) for v in run.normalisation.mean],
                               "std": [float(v) for v in run.normalisation.std]},
             "window_norm": d.window_norm,
+            "baseline": {"mode": d.baseline.mode, "duration_ms": d.baseline.duration_ms,
+                         "inside_model": False},
         },
         "outputs": [
             {"name": n, "head": h.name, "kind": h.kind, "source": h.source,
@@ -295,6 +307,18 @@ def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) ->
             "sources": _sources(run),
         },
     }
+
+
+def _baseline_note(baseline: Any) -> str:
+    """What the caller subtracts before the graph when the run removed per-trial baselines
+    (the level is a property of the trial, not of one window, so it stays outside)."""
+    if baseline.mode == "none":
+        return ""
+    level = (f"the mean of the trial's first {baseline.duration_ms:g} ms"
+             if baseline.mode == "start" else "the trial's median")
+    return (f" The run removed each trial's resting level (data.baseline, mode "
+            f"{baseline.mode}): subtract {level}, per channel, from every sample before "
+            "feeding it.")
 
 
 def export_run(run_dir: str | Path, out: str | Path, *,

@@ -32,7 +32,7 @@ from torch import Tensor, nn
 from torch.nn import functional as F
 
 from .config import (
-    SUMMARY_FEATURES,
+    FEATURE_NAMES,
     Cnn1dConfig,
     Cnn2dSpectrogramConfig,
     FnnConfig,
@@ -145,10 +145,10 @@ class SummaryFeatures(nn.Module):
 
     def __init__(self, features: Sequence[str], window: int, n_channels: int):
         super().__init__()
-        unknown = set(features) - set(SUMMARY_FEATURES)
+        unknown = set(features) - set(FEATURE_NAMES)
         if unknown:
             raise ValueError(f"`features` has unknown names {sorted(unknown)}; "
-                             f"choose from {SUMMARY_FEATURES}")
+                             f"choose from {FEATURE_NAMES}")
         self.features = tuple(features)
         idx = torch.arange(window, dtype=torch.float32) - (window - 1) / 2
         denom = float((idx**2).sum()) or 1.0
@@ -171,12 +171,33 @@ class SummaryFeatures(nn.Module):
                 parts.append(x.amax(dim=1))
             elif name == "last":
                 parts.append(x[:, -1])
-            else:  # slope
+            elif name == "slope":
                 parts.append(torch.einsum("bwc,w->bc", x, self.slope_weights))
+            elif name == "range":
+                parts.append(x.amax(dim=1) - x.amin(dim=1))
+            elif name == "diff_std":
+                parts.append(torch.diff(x, dim=1).std(dim=1, correction=0) if x.shape[1] > 1
+                             else torch.zeros_like(x[:, 0]))
+            else:  # skew, kurtosis: standardised moments, 0 without spread
+                parts.append(_moment(x, 3 if name == "skew" else 4))
         return torch.cat(parts, dim=1)
 
     def forward(self, x: Tensor) -> Tensor:
         return (self.raw(x) - self.feature_mean) / self.feature_std
+
+
+def _moment(x: Tensor, order: int) -> Tensor:
+    """(B, W, C) -> (B, C) skewness (order 3) or excess kurtosis (order 4) over the window;
+    0 where a channel is constant over the window (tested on its range: the float32 mean
+    of equal values can differ from them by a rounding step, and that step's moments are
+    noise)."""
+    centred = x - x.mean(dim=1, keepdim=True)
+    var = (centred**2).mean(dim=1)
+    ok = (x.amax(dim=1) > x.amin(dim=1)) & (var > 0)
+    m = (centred**order).mean(dim=1) / torch.where(ok, var, torch.ones_like(var)) ** (order / 2)
+    if order == 4:
+        m = m - 3.0
+    return torch.where(ok, m, torch.zeros_like(m))
 
 
 class MlpTrunk(nn.Module):

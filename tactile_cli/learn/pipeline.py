@@ -237,6 +237,7 @@ def evaluate_run(
     exported: str | Path | None = None,
     perturb: Sequence[str] | None = None,
     threshold: str = "0.9x",
+    shift_threshold_sd: float = 1.0,
     command: str | None = None,
     on_level: Callable[[str, float, float], None] | None = None,
 ) -> EvaluateRunResult:
@@ -248,6 +249,9 @@ def evaluate_run(
     too, with the breaking point below ``threshold`` (``"0.9x"`` the clean accuracy, or an
     accuracy ``"0.95"``/``"95%"``), into ``RUN/perturb/<name>/``
     (:func:`.perturb.perturb_runs`; ``on_level`` reports each level).
+    ``shift_threshold_sd``: a channel whose mean in the evaluated data lies further than
+    this many training standard deviations from the training data's is flagged
+    (:mod:`.drift`).
     """
     from . import runs
     from .evaluate import evaluate
@@ -275,7 +279,7 @@ def evaluate_run(
                       [*files, *([exported] if exported is not None else [])])
     result = evaluate(run_dir, files or None, split=split, name=name, latency=latency,
                       threads=threads, command=command, overwrite=overwrite,
-                      exported=exported)
+                      exported=exported, shift_threshold_sd=shift_threshold_sd)
     perturbed = None
     if perturb is not None:
         from .perturb import perturb_runs
@@ -283,7 +287,9 @@ def evaluate_run(
         perturbed = perturb_runs([run_dir], files, kinds=perturb, threshold=threshold,
                                  split=split, name=name, command=command,
                                  on_level=on_level).results[0]
-    warnings = [*result.notes, *result.warnings]
+    from .tables import drift_warnings
+
+    warnings = [*result.notes, *result.warnings, *drift_warnings(result)]
     if result.overlaps_training and split == "all":
         warnings.append(f"{', '.join(result.overlaps_training)} was used to train this run; "
                         "these metrics include training trials (use `split='test'`)")

@@ -15,13 +15,22 @@ Modes (``data.split.mode``, see :class:`~tactile_cli.learn.config.SplitConfig`):
   training trial) stays out of that split, and the assignment carries a warning saying so.
 - ``group``: the groups (values of ``by``) in hash order go whole to test, then to val, until
   the fraction of trials is reached; a group is never split.
+- ``blocked``: the values of ``by`` in recording order (natural order: numbers by value;
+  ``time_origin_unix_s`` is the trial's start time), the latest values whole to test (as
+  many as come nearest ``round(test_fraction n)`` trials, at least one), the values just
+  before them to val, the rest to train; with ``within``, inside every value of that label
+  (every class keeps its own earliest recordings for training). A value is never split, and
+  no held-out trial lies between two training trials of its stratum.
 
 Folds (:func:`cv_folds`): ``k``-fold by the same modes (random: dealt round the folds in hash
 order; stratified: each class dealt round the folds, continuing where the previous class
 stopped, so fold sizes stay within one trial; group: largest groups first, each to the fold
-with the fewest trials), or ``loto`` (leave one trial out). Inside a fold, the validation
-trials are taken from the fold's training trials by the configured mode and
-``val_fraction`` (a fraction of those trials).
+with the fewest trials; blocked: the values in recording order cut into ``k`` contiguous
+blocks whose trial counts are as even as possible, block ``i`` is fold ``i``, inside every
+value of ``within`` when it is set), or ``loto`` (leave one trial out). Inside a fold, the
+validation trials are taken from the fold's training trials by the configured mode and
+``val_fraction`` (a fraction of those trials; blocked: the latest training blocks).
+Blocked folds do not depend on the seed at all: recording order decides them.
 """
 
 from __future__ import annotations
@@ -33,6 +42,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
+
+import numpy as np
 
 from ..config_file import read_text
 from ..errors import InputError
@@ -62,7 +73,7 @@ class SplitAssignment:
     """Which split each trial belongs to, how that was decided, and what to warn about."""
 
     splits: tuple[str, ...]  # one of SPLITS per trial, in the order of the trials
-    mode: str  # attribute, random, stratified, group, given (a mapping), cv
+    mode: str  # attribute, random, stratified, group, blocked, given (a mapping), cv
     by: str | None = None
     warnings: tuple[str, ...] = ()
 
@@ -91,9 +102,12 @@ class FoldPlan:
     by: str | None
     folds: list[Fold]
     warnings: list[str] = field(default_factory=list)
+    within: str | None = None
+    """``blocked`` folds cut inside every value of this label (None: across all trials)."""
 
     def as_dict(self) -> dict[str, Any]:
         return {"k": self.k, "n_folds": len(self.folds), "mode": self.mode, "by": self.by,
+                **({"within": self.within} if self.within is not None else {}),
                 "folds": [{"fold": f.index, "test": list(f.test_keys),
                            "counts": f.assignment.counts()} for f in self.folds],
                 "warnings": list(self.warnings)}
@@ -103,6 +117,138 @@ def fold_text(k: int | str, n_folds: int, mode: str, by: str | None = None) -> s
     """``"5 folds (stratified by material)"``, or ``"7 folds (leave one trial out)"``."""
     how = "leave one trial out" if k == "loto" else mode + (f" by {by}" if by else "")
     return f"{n_folds} folds ({how})"
+
+
+# -- recording order (blocked) -----------------------------------------------------------------
+#: The trial attribute a ``blocked`` split may order by when no trial label has that name.
+TIME_ORIGIN = "time_origin_unix_s"
+
+
+def order_value(trial: SplitTrial, by: str) -> str:
+    """The value of ``by`` that places a trial in recording order, as text for
+    :func:`~tactile_cli.natural.natural_key` (numbers sort by value): a trial label, or for
+    ``time_origin_unix_s`` without such a label the trial's start time."""
+    if by in trial.trial_labels:
+        return str(trial.trial_labels[by])
+    if by == TIME_ORIGIN:
+        value = getattr(trial, "time_origin_unix_s", None)
+        if value is not None:
+            return repr(float(value))
+        raise InputError("trial has no start time (attribute time_origin_unix_s, written by "
+                         "the mapped-CSV ingest of epoch time columns); order the blocks by "
+                         "a trial label such as a sample number (data.split.by)",
+                         path=trial.file, where=f"/trials/{trial.trial}")
+    raise InputError(f"no trial label {by!r} to order the blocks by (trial labels: "
+                     f"{', '.join(trial.trial_labels) or 'none'}); fix data.split.by (a trial "
+                     "label or time_origin_unix_s)", path=trial.file,
+                     where=f"/trials/{trial.trial}/labels")
+
+
+def _ordered_values(trials: Sequence[SplitTrial], idx: Sequence[int], by: str
+                    ) -> list[tuple[str, list[int]]]:
+    """(value, indices of its trials) of the trials ``idx``, values in recording order."""
+    out: dict[str, list[int]] = {}
+    for i in idx:
+        out.setdefault(order_value(trials[i], by), []).append(i)
+    return [(v, out[v]) for v in sorted(out, key=natural_key)]
+
+
+def contiguous_blocks(counts: Sequence[int], k: int) -> list[int]:
+    """Block index (0..k-1, non-decreasing) of each of ``len(counts)`` ordered values whose
+    trial counts are ``counts``: ``k`` contiguous, non-empty blocks whose trial counts are
+    as even as possible (least squares from ``n / k``, exact in integers; ties: the earlier
+    cut). ``k`` must be between 1 and ``len(counts)``."""
+    m = len(counts)
+    if not 1 <= k <= m:
+        raise ValueError(f"`k` (={k}) must be between 1 and the number of values (={m})")
+    prefix = np.concatenate([[0], np.cumsum(np.asarray(counts, dtype=np.int64))])
+    n = int(prefix[-1])
+    big = np.iinfo(np.int64).max // 4
+    cost = np.full((k + 1, m + 1), big, dtype=np.int64)  # cost[j, i]: i values in j blocks
+    cut = np.zeros((k + 1, m + 1), dtype=np.int64)
+    cost[0, 0] = 0
+    for j in range(1, k + 1):
+        for i in range(j, m - (k - j) + 1):
+            p = np.arange(j - 1, i)
+            c = cost[j - 1, p] + (k * (prefix[i] - prefix[p]) - n) ** 2
+            best = int(np.argmin(c))  # the first minimum: the earlier cut
+            cost[j, i], cut[j, i] = c[best], p[best]
+    out = [0] * m
+    i = m
+    for j in range(k, 0, -1):
+        p = int(cut[j, i])
+        for v in range(p, i):
+            out[v] = j - 1
+        i = p
+    return out
+
+
+def _blocked_strata(trials: Sequence[SplitTrial], within: str | None) -> dict[str, list[int]]:
+    return _strata(trials, within) if within is not None else {"": list(range(len(trials)))}
+
+
+def _trailing(values: Sequence[tuple[str, list[int]]], want: int) -> int:
+    """How many of the last ``values`` hold nearest ``want`` trials (at least one when
+    ``want`` > 0; ties: fewer values)."""
+    if want <= 0:
+        return 0
+    best, best_gap, total = 1, None, 0
+    for t in range(1, len(values) + 1):
+        total += len(values[-t][1])
+        gap = abs(total - want)
+        if best_gap is None or gap < best_gap:
+            best, best_gap = t, gap
+        if total >= want:
+            break
+    return best
+
+
+def _blocked_split(trials: Sequence[SplitTrial], split: SplitConfig, by: str
+                   ) -> SplitAssignment:
+    out = ["train"] * len(trials)
+    warnings: list[str] = []
+    for stratum, idx in _blocked_strata(trials, split.within).items():
+        values = _ordered_values(trials, idx, by)
+        n = len(idx)
+        n_test = _trailing(values, _count(split.test_fraction, n))
+        n_val = _trailing(values[:len(values) - n_test], _count(split.val_fraction, n))
+        where = f" within {split.within}={stratum}" if split.within is not None else ""
+        while len(values) - n_test - n_val < 1 and (n_val or n_test):
+            if n_val:
+                n_val -= 1
+                warnings.append(f"{by} has {len(values)} value(s){where}: none left for val")
+            else:
+                n_test -= 1
+                warnings.append(f"{by} has {len(values)} value(s){where}: none left for test")
+        if split.within is None and n_test == 0 and split.test_fraction > 0:
+            raise InputError(f"label {by!r} has {len(values)} value(s): a blocked split needs "
+                             "at least 2 (one for training and one held out)")
+        for pos, (_, members) in enumerate(reversed(values)):
+            name = "test" if pos < n_test else "val" if pos < n_test + n_val else "train"
+            for i in members:
+                out[i] = name
+    return SplitAssignment(tuple(out), "blocked", by, tuple(warnings))
+
+
+def _blocked_folds(trials: Sequence[SplitTrial], split: SplitConfig, by: str, k: int
+                   ) -> tuple[list[int], list[str]]:
+    """Fold index of each trial by the blocked k-fold rule, and the plan's warnings."""
+    fold_of = [0] * len(trials)
+    warnings: list[str] = []
+    for stratum, idx in _blocked_strata(trials, split.within).items():
+        values = _ordered_values(trials, idx, by)
+        if len(values) < k:
+            if split.within is None:
+                raise InputError(f"label {by!r} has {len(values)} value(s), fewer than the {k} "
+                                 "folds; lower `k` or order the blocks by another label")
+            warnings.append(f"{split.within}={stratum} has {len(values)} value(s) of {by}, "
+                            f"fewer than the {k} folds: {k - len(values)} fold(s) hold none "
+                            "of it")
+        blocks = contiguous_blocks([len(m) for _, m in values], min(k, len(values)))
+        for b, (_, members) in zip(blocks, values, strict=True):
+            for i in members:
+                fold_of[i] = b
+    return fold_of, warnings
 
 
 # -- what a trial is, for a rule ---------------------------------------------------------------
@@ -181,10 +327,12 @@ def assign_splits(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, *
                                  path=t.file, where=f"/trials/{t.trial}")
         return SplitAssignment(tuple(attrs), "attribute")
     split_seed = seed if split.seed is None else split.seed
-    if mode in ("stratified", "group") and by is None:
+    if mode in ("stratified", "group", "blocked") and by is None:
         raise InputError(f"data.split.mode {mode} needs data.split.by")
     if mode == "group":
         return _group_split(trials, split, split_seed, str(by))
+    if mode == "blocked":
+        return _blocked_split(trials, split, str(by))
     strata = _strata(trials, str(by)) if mode == "stratified" else {"": list(range(len(trials)))}
     out = ["train"] * len(trials)
     warnings: list[str] = []
@@ -381,7 +529,11 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
         if not isinstance(k, int) or k < 2:
             raise InputError(f"`k` must be an integer >= 2 or loto, got {k!r}")
         n_folds = k
-        if mode == "group":
+        if mode == "blocked":
+            if by is None:
+                raise InputError("data.split.mode blocked needs data.split.by")
+            fold_of, warnings = _blocked_folds(trials, split, str(by), k)
+        elif mode == "group":
             groups = _strata(trials, str(by))
             if len(groups) < k:
                 raise InputError(f"label {by!r} has {len(groups)} group(s), fewer than the {k} "
@@ -407,7 +559,8 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
                                   [t.file for t in trials])
     folds = []
     inner = SplitConfig(mode=mode if mode != "auto" else "random", by=by,
-                        val_fraction=split.val_fraction, test_fraction=0.0, seed=split.seed)
+                        val_fraction=split.val_fraction, test_fraction=0.0, seed=split.seed,
+                        within=split.within if mode == "blocked" else None)
     for f in range(n_folds):
         held = [i for i in range(n) if fold_of[i] == f]
         rest = [i for i in range(n) if fold_of[i] != f]
@@ -419,9 +572,11 @@ def cv_folds(trials: Sequence[SplitTrial], split: SplitConfig, seed: int, k: int
         fold_warn = tuple(inner_assign.warnings)
         folds.append(Fold(f, SplitAssignment(tuple(out), "cv", by, fold_warn),
                           tuple(trials[i].key for i in held)))
-    return FoldPlan(k, mode, by if mode in ("stratified", "group") else None, folds, warnings)
+    return FoldPlan(k, mode, by if mode in ("stratified", "group", "blocked") else None, folds,
+                    warnings, split.within if mode == "blocked" else None)
 
 
-__all__ = ["SPLITS", "Fold", "FoldPlan", "SplitAssignment", "assign_splits", "cv_folds",
+__all__ = ["SPLITS", "TIME_ORIGIN", "Fold", "FoldPlan", "SplitAssignment", "assign_splits",
+           "contiguous_blocks", "cv_folds", "order_value",
            "fold_text", "default_by", "read_run_splits", "read_split_csv", "split_from_mapping",
            "held_out_trials", "stratified_fold_of", "trial_class"]

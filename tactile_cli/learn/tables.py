@@ -121,7 +121,54 @@ def evaluation_blocks(result: EvalResult) -> list[str | TextTable]:
             blocks.append(f"{m.head}: MAE {m.mae:.4g}, RMSE {m.rmse:.4g} ({m.n:,} windows)")
     if result.cv:
         blocks.append(_cv_line(result.cv))
-    return [*blocks, cost_table(result), f"wrote {result.out_dir}"]
+    return [*blocks, cost_table(result), *drift_lines(result), f"wrote {result.out_dir}"]
+
+
+def drift_lines(result: EvalResult) -> list[str]:
+    """The input-shift and interleaving lines of an evaluation (:mod:`.drift`)."""
+    from .drift import ChannelShift, ShiftReport
+
+    out = []
+    shift = result.extra.get("shift")
+    if shift:
+        report = ShiftReport(shift["threshold_sd"], shift["n_samples"],
+                             [ChannelShift(**c) for c in shift["channels"]])
+        what = "worst fold per channel" if shift.get("folds") else "evaluated data"
+        out.append(f"input shift ({what}): largest |shift| {shift['max_abs_shift_sd']:.2f} "
+                   f"training SD; {report.summary()}")
+    inter = result.extra.get("interleaving")
+    if inter:
+        if inter.get("interleaved") is None:
+            out.append(f"recording order: unknown ({inter.get('reason')})")
+        else:
+            inside = (inter["n_inside_class_span"] if inter.get("n_inside_class_span")
+                      is not None else inter["n_inside_span"])
+            where = f" of their {inter['class_label']}" if inter.get("class_label") else ""
+            out.append(f"recording order (by {inter['order_by']}): {inside} of "
+                       f"{inter['n_evaluated']} evaluated trial(s) inside the span of the "
+                       f"training trials{where}"
+                       + (" (interleaved)" if inter["interleaved"] else " (not interleaved)"))
+    return out
+
+
+def drift_warnings(result: EvalResult) -> list[str]:
+    """The one-line warnings of an evaluation: interleaved trials, shifted channels."""
+    from .drift import ChannelShift, Interleaving, ShiftReport
+
+    out = []
+    inter = result.extra.get("interleaving")
+    if inter:
+        message = Interleaving(**{k: v for k, v in inter.items() if k != "folds"}).message()
+        if message:
+            out.append(message)
+    shift = result.extra.get("shift")
+    if shift and shift.get("flagged"):
+        report = ShiftReport(shift["threshold_sd"], shift["n_samples"],
+                             [ChannelShift(**c) for c in shift["channels"]])
+        out.append(report.summary() + "; the model sees levels it was not trained on "
+                   "(remove per-trial baselines or use level-free features: data.baseline, "
+                   "data.window_norm)")
+    return out
 
 
 def cost_table(result: EvalResult) -> TextTable:
@@ -213,5 +260,6 @@ def perturbation_blocks(results: Sequence[PerturbResult]) -> list[str | TextTabl
     return blocks
 
 
-__all__ = ["TextTable", "comparison_table", "cost_table", "evaluation_blocks", "num", "pct",
+__all__ = ["TextTable", "comparison_table", "cost_table", "drift_lines", "drift_warnings",
+           "evaluation_blocks", "num", "pct",
            "perturbation_blocks", "perturbation_table"]

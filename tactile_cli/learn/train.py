@@ -46,10 +46,12 @@ from .data import (
     resolve_channels,
     resolve_heads,
 )
+from .drift import recording_record
 from .figures import plot_curves
 from .heads import HeadSpec, primary_head
 from .inputs import InputSpec, input_spec
 from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
+from .preprocess import augment_windows
 from .splits import SplitAssignment, assign_splits, default_by, split_from_mapping
 
 
@@ -157,7 +159,7 @@ def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
         raise InputError("no trial is in the train split (split attributes: "
                          f"{assignment.counts()}); set data.split.mode: random")
     norm = fit_normalisation(by_split["train"], d.channels, enabled=d.normalise,
-                             transform=d.transform)
+                             transform=d.transform, baseline=d.baseline)
     train_ws = make_windows(by_split["train"], d, heads, norm)
     if len(train_ws) == 0:
         raise InputError(f"the training trials give no windows (window {d.window} samples, "
@@ -232,7 +234,10 @@ def _set_feature_stats(model: MultiTaskNet, ws: WindowSet, norm: Normalisation) 
             feats.append(summary.raw(torch.from_numpy(ws.windows(idx))).double())
     f = torch.cat(feats)
     mean, std = f.mean(dim=0), f.std(dim=0, correction=0)
-    std = torch.where(torch.isfinite(std) & (std > 0), std, torch.ones_like(std))
+    # a feature constant up to float rounding (the std of z-scored windows: 1 +- 1e-7) is
+    # constant: dividing by that spread would blow the rounding up into large inputs
+    varies = torch.isfinite(std) & (std > 1e-5 * mean.abs().clamp(min=1.0))
+    std = torch.where(varies, std, torch.ones_like(std))
     summary.feature_mean.copy_(mean.float())
     summary.feature_std.copy_(std.float())
     norm.features = {"names": list(summary.features), "mean": mean.tolist(),
@@ -294,6 +299,9 @@ def train(
         if opt_cfg.lr_schedule == "cosine":
             schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optim, T_max=opt_cfg.epochs)
         gen = torch.Generator().manual_seed(config.seed)
+        # augmentation draws come from their own stream, so turning it on leaves the batch
+        # order and the initial weights of the same seed unchanged
+        aug_rng = np.random.default_rng([config.seed, 34]) if d.augment.active else None
         history: list[EpochRecord] = []
         best_state = copy.deepcopy(model.state_dict())
         best_epoch, best_score, since_best = 0, math.inf, 0
@@ -308,7 +316,12 @@ def train(
             total = 0.0
             for lo in range(0, n, opt_cfg.batch_size):
                 idx = order[lo:lo + opt_cfg.batch_size]
-                outputs = model(torch.from_numpy(train_ws.windows(idx)))
+                if aug_rng is None:
+                    batch = train_ws.windows(idx)
+                else:
+                    batch = train_ws.normalise(augment_windows(train_ws.raw_windows(idx),
+                                                               d.augment, aug_rng))
+                outputs = model(torch.from_numpy(batch))
                 loss = multitask_loss(outputs, batch_targets(train_ws, idx), prep.heads,
                                       weights).total
                 optim.zero_grad(set_to_none=True)
@@ -367,6 +380,10 @@ def train(
                   "n_trials": sum(1 for t in prep.trials if t.file == str(p))} for p in paths],
         "heads": [h.as_dict() for h in prep.heads],
         "input": prep.input.as_dict(),
+        "recording_order": recording_record(
+            [t for t, s in zip(prep.trials, prep.assignment.splits, strict=True)
+             if s in ("train", "val")], prep.heads, split_mode=d.split.mode,
+            split_by=d.split.by),
         "class_weights": None if weights is None else {k: v.tolist()
                                                        for k, v in weights.items()},
         "split": {"mode": prep.assignment.mode, "by": prep.assignment.by,

@@ -31,6 +31,10 @@ RUNS = {
                            "channels": [4]}, {}),
     "fnn": ({"family": "fnn", "hidden": [8]}, {"pad": "edge"}),
     "mlp": ({"family": "mlp", "hidden": [8]}, {}),
+    # issue 34: per-trial baseline removal, per-window z-score and level-free features
+    "mlp_drift": ({"family": "mlp", "hidden": [8],
+                   "features": ["std", "range", "diff_std", "skew", "kurtosis"]},
+                  {"window_norm": "zscore", "baseline": {"mode": "start", "duration_ms": 100}}),
     "multihead": ({"family": "cnn1d", "channels": [4], "kernel": 3}, {
         "window_norm": "center_scale", "targets": [
             {"name": "action"},
@@ -271,3 +275,15 @@ def test_readme_snippet_classifies_a_csv_window_without_tactile(trained, exporte
     want = run.heads[0].classes[int(mine["action.probabilities"][k].argmax())]
     assert lines["action"].split()[0] == want
     assert float(lines["force_level"]) == pytest.approx(mine["force_level.value"][k], abs=1e-4)
+
+
+def test_sidecar_says_what_the_caller_subtracts_for_a_baseline_run(exported):
+    side = json.loads(ex.sidecar_path(exported["mlp_drift"]).read_text())
+    assert side["preprocessing"]["baseline"] == {"mode": "start", "duration_ms": 100.0,
+                                                 "inside_model": False}
+    assert side["preprocessing"]["window_norm"] == "zscore"
+    assert "subtract the mean of the trial's first 100 ms, per channel, from every sample" \
+        in side["input"]["note"]
+    plain = json.loads(ex.sidecar_path(exported["mlp"]).read_text())
+    assert plain["preprocessing"]["baseline"]["mode"] == "none"
+    assert "resting level" not in plain["input"]["note"]
