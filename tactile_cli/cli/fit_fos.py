@@ -453,7 +453,8 @@ def fit_fos_command(
         return {"files": [str(path)], "input": "stream", "bin_s": None,
                 "fits": {stream: rf}, "labels": None, "records": {stream: records},
                 "written": {}, "quantities": [stream] * len(curves),
-                "no_step": {stream: found.no_step}}
+                "no_step": {stream: found.no_step},
+                "not_fitted": {stream: found.not_fitted}}
 
     def _report(result: dict[str, Any]) -> None:
         from ..fos.table import write_csv
@@ -484,7 +485,8 @@ def fit_fos_command(
                     region: {"model": result["fits"][region].model,
                              "group": result["written"].get(region),
                              "summary": summaries[region], "fits": recs,
-                             **({"no_step": result["no_step"][region]}
+                             **({"no_step": result["no_step"][region],
+                                 "not_fitted": result["not_fitted"][region]}
                                 if "no_step" in result else {})}
                     for region, recs in result["records"].items()},
                 "csv": None if csv_out is None else str(csv_out), "figures": figures,
@@ -500,7 +502,13 @@ def fit_fos_command(
                 shown = ", ".join(missed[:10]) + (f", ... ({len(missed)} in all)"
                                                   if len(missed) > 10 else "")
                 console.print(f"  no step found (not fitted) in {len(missed)} curve(s): "
-                              f"{shown}")
+                              f"{shown}", markup=False, highlight=False)
+            why = result.get("not_fitted", {}).get(region, {})
+            for curve, reason in list(why.items())[:MAX_ROWS]:
+                console.print(f"    {curve}: {reason}", markup=False, highlight=False)
+            if len(why) > MAX_ROWS:
+                console.print(f"    ... {len(why) - MAX_ROWS} more; use --json for all",
+                              markup=False, highlight=False)
         if csv_out is not None:
             console.print(f"wrote {csv_out}")
         if figures:
