@@ -21,6 +21,7 @@ METHODS = {"learn", "fos", "grade", "spectral"}
 #: Third-party packages that one package alone may import, and that package.
 OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
           "onnx": {"learn"}, "onnxruntime": {"learn"}, "onnxscript": {"learn"},
+          "skl2onnx": {"learn"},
           "jax": {"fos"}, "optimistix": {"fos"}, "dask": {"batch"}, "distributed": {"batch"}}
 
 

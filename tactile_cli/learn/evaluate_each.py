@@ -94,6 +94,7 @@ def evaluate_each(
                              f"to {runs.EVAL_DIR}/{name}; rename one", path=path)
         seen[name] = path
     model_mtime = max(newest_mtime(p) for p in (run_dir / runs.MODEL_PT,
+                                               run_dir / runs.MODEL_ONNX,
                                                run_dir / runs.RUN_JSON) if p.exists())
     items = []
     for path in paths:
