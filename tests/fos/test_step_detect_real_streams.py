@@ -120,3 +120,22 @@ def test_fit_fos_fits_every_curve_or_names_why_not(tmp_path):
     assert fits["first_order"]["order_verdict"] == "first_order"
     assert fits["staircase"]["order_verdict"] in ("second_order", "relaxation")
     assert all(f["region"] == "rise" for f in region["fits"])
+
+
+def test_a_press_that_creeps_back_over_seconds_is_not_first_order():
+    # xela_press: a fast rise, a quick partial relaxation and a creep over seconds, in a
+    # region of 27 s. The second-order fit started at the first-order solution (poles at
+    # tau and tau/4) ended unconverged there ("second_order", no shape); its second start at
+    # a relaxation (the slow pole at a quarter of the span) finds a rise and a relaxation.
+    from tactile_cli.fos.protocol import fit_curves
+    from tactile_cli.fos.table import fit_records
+
+    use_test_compilation_cache()
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 27.0, DT)
+    x = (2300.0 * -np.expm1(-t / 0.1) - 700.0 * -np.expm1(-t / 0.6)
+         - 500.0 * -np.expm1(-t / 8.0) + rng.normal(0, 8, t.size))
+    (rec,) = fit_records(fit_curves([(t, x)], model="step", order=True))
+    assert rec["order_verdict"] == "relaxation"
+    assert 0.3 <= rec["relax_fraction"] <= 0.45  # (700 + 500) / 2300 lost, in one mode
+    assert 2.0 <= rec["relax_tau_s"] <= 10.0 and rec["rise_tau_s"] < 0.3
