@@ -45,6 +45,7 @@ RULES: dict[str, set[str]] = {
 #: Third-party packages that one package alone may import, and that package.
 OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
           "onnx": {"learn"}, "onnxruntime": {"learn"}, "onnxscript": {"learn"},
+          "skl2onnx": {"learn"},
           "jax": {"fos"}, "optimistix": {"fos"}, "dask": {"batch"}, "distributed": {"batch"}}
 
 

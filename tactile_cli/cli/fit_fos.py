@@ -134,7 +134,14 @@ def _print_region(console: Console, name: str, region: Any) -> None:
     if missed:
         shown_names = ", ".join(missed[:10]) + (f", ... ({len(missed)} in all)"
                                                 if len(missed) > 10 else "")
-        console.print(f"  no step found (not fitted) in {len(missed)} curve(s): {shown_names}")
+        console.print(f"  no step found (not fitted) in {len(missed)} curve(s): {shown_names}",
+                      markup=False, highlight=False)
+    why = region.not_fitted or {}
+    for curve, reason in list(why.items())[:MAX_ROWS]:
+        console.print(f"    {curve}: {reason}", markup=False, highlight=False)
+    if len(why) > MAX_ROWS:
+        console.print(f"    ... {len(why) - MAX_ROWS} more; use --json for all", markup=False,
+                      highlight=False)
 
 
 def _describe(item: Any) -> str:

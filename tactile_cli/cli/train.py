@@ -70,7 +70,8 @@ def train_command(
                      "one line per epoch on stderr).", show_default=False),
     ] = None,
 ) -> None:
-    """Train a model of the registry (lstm, cnn1d, cnn2d_spectrogram, fnn, mlp) on windows of
+    """Train a model of the registry (lstm, cnn1d, cnn2d_spectrogram, fnn, mlp, cnn2d_layout;
+    or a classic one: logistic, random_forest, hist_gb, svm, stored as ONNX) on windows of
     tactile HDF5 files and write a run folder: weights, resolved config, normalisation,
     history and curves, versions and data provenance. Deterministic with a seed on CPU."""
 

@@ -48,7 +48,9 @@ class RegionResult:
     stream's curves (named after the stream): ``records`` one JSON-ready row per trial or
     curve (:func:`~tactile_cli.fos.table.fit_records`), ``summary`` their counts and median
     R (:func:`~tactile_cli.fos.table.fit_summary`), ``group`` the HDF5 group written,
-    ``no_step`` the curves of a stream in which no step was found (None unless a stream)."""
+    ``no_step`` the curves of a stream in which no step was found (None unless a stream),
+    ``not_fitted`` why each curve of a stream that was not fitted was left out
+    (``trial/channel[/region]`` -> reason)."""
 
     region: str
     model: str
@@ -56,12 +58,15 @@ class RegionResult:
     summary: dict[str, Any]
     group: str | None = None
     no_step: list[str] | None = None
+    not_fitted: dict[str, str] | None = None
 
     def as_dict(self) -> dict[str, Any]:
         out = {"model": self.model, "group": self.group, "summary": self.summary,
                "fits": self.records}
         if self.no_step is not None:
             out["no_step"] = self.no_step
+        if self.not_fitted is not None:
+            out["not_fitted"] = self.not_fitted
         return out
 
 
@@ -344,7 +349,7 @@ def _fit_stream(req: _Request, progress: Progress) -> tuple[RegionFits, RegionRe
                     "stream": req.stream, "baseline": c.baseline,
                     "region_start_s": c.start_s, "region_end_s": c.end_s})
     return rf, RegionResult(req.stream, rf.model, records, fit_summary(records),
-                            no_step=found.no_step)
+                            no_step=found.no_step, not_fitted=found.not_fitted)
 
 
 def _plot(req: _Request, fits: Mapping[str, RegionFits], *, labels: Any,

@@ -39,7 +39,7 @@ Verdicts, per trial:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -95,6 +95,32 @@ class OrderSelection:
             row.update({f"second_{k}": v for k, v in r2.items() if k != "trial"})
             out.append(row)
         return out
+
+
+def _span_s(t_s: ArrayLike, y: ArrayLike, mask: ArrayLike | None) -> np.ndarray:
+    """(n_trials,) time from each trial's first to its last valid point (s)."""
+    yy = np.atleast_2d(np.asarray(y, dtype=np.float64))
+    t = np.broadcast_to(np.asarray(t_s, dtype=np.float64), yy.shape)
+    valid = np.ones(yy.shape, bool) if mask is None else \
+        np.broadcast_to(np.asarray(mask, dtype=bool), yy.shape)
+    with np.errstate(invalid="ignore"):
+        hi = np.where(valid, t, -np.inf).max(axis=-1)
+        lo = np.where(valid, t, np.inf).min(axis=-1)
+    return np.where(np.isfinite(hi - lo), hi - lo, np.nan)
+
+
+def _lower_rss(a: FosFitResult, b: FosFitResult) -> FosFitResult:
+    """Per trial, the fit of ``a`` or ``b`` whose residual is lower (``a`` on ties and where
+    ``b`` has none)."""
+    take_b = np.isfinite(b.rss) & ~(b.rss >= a.rss)
+    if not take_b.any():
+        return a
+    picked = {}
+    for f in fields(a):
+        va, vb = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(va, np.ndarray) and va.shape[:1] == take_b.shape:
+            picked[f.name] = np.where(take_b.reshape((-1,) + (1,) * (va.ndim - 1)), vb, va)
+    return replace(a, **picked)
 
 
 def _finite(x: float) -> float | None:
@@ -165,6 +191,18 @@ def select_order(
                   zeta0=np.where(first.ok, 1.25, np.nan),
                   duration0_s=first.duration_s if fit_duration else None, keep_failed=True,
                   **common)
+    if kind == "step":
+        # A press that rises and then creeps back over seconds (a taxel pad, xela_press)
+        # has its second-order optimum far from the first-order one, where the fit above
+        # stays (its RSS no lower: "first order"). A second start at a relaxation, poles at
+        # the first-order tau and at a quarter of the trial's span (at least 4 tau), and
+        # per trial the start whose fit ends with the lower residual.
+        slow = np.maximum(4.0 * first.tau_s, _span_s(t_s, y, mask) / 4.0)
+        tau_b = np.sqrt(first.tau_s * slow)
+        relax = _fit(config(2), t_s, y, mask, tau0_s=tau_b,
+                     zeta0=np.where(first.ok, (first.tau_s + slow) / (2.0 * tau_b), np.nan),
+                     duration0_s=None, keep_failed=True, **common)
+        second = _lower_rss(second, relax)
     # The second fit kept its last iterate: its residual is real even when it did not
     # converge (see the module doc); it is reported with NaN parameters like any failed fit.
     nan_unless_first = np.where(first.ok, 1.0, np.nan)

@@ -59,12 +59,32 @@ class DetectedStep:
     lag_s: float
 
 
+def held_run_length(x: ArrayLike) -> float:
+    """The median length of the runs of exactly equal consecutive samples of ``x``: 1 for a
+    signal that changes every sample, about 4 for a 42 Hz logger that repeats a sensor's
+    value between its ~10 Hz updates (``xela_press``)."""
+    v = np.asarray(x, dtype=np.float64)
+    if v.size < 2:
+        return 1.0
+    change = np.flatnonzero(v[1:] != v[:-1])
+    bounds = np.concatenate([[0], change + 1, [v.size]])
+    return float(np.median(np.diff(bounds)))
+
+
 def noise_sigma(x: ArrayLike) -> float:
     """Robust sample noise of ``x`` (n,): 1.4826 MAD of first differences over sqrt 2,
-    floored at a quarter of the smallest nonzero first difference; 0 for a constant signal."""
-    d = np.diff(np.asarray(x, dtype=np.float64))
+    floored at a quarter of the smallest nonzero first difference; 0 for a constant signal.
+    A signal of held samples (median run of equal samples of 2 or more: a logger faster than
+    its sensor) is measured between its distinct values: its many zero differences are
+    repeats, not a noiseless sensor."""
+    v = np.asarray(x, dtype=np.float64)
+    d = np.diff(v)
     if d.size == 0:
         return 0.0
+    if held_run_length(v) >= 2:
+        d = d[d != 0]
+        if d.size == 0:
+            return 0.0
     mad = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / np.sqrt(2.0)
     nonzero = np.abs(d[d != 0])
     floor = 0.25 * float(nonzero.min()) if nonzero.size else 0.0
@@ -75,16 +95,22 @@ def _lagged(x: np.ndarray, w: int) -> np.ndarray:
     return x[w:] - x[:-w]
 
 
-def _refine(t: np.ndarray, x: np.ndarray, onset: int, w: int) -> int:
+def _refine(t: np.ndarray, x: np.ndarray, onset: int, w: int, sigma: float = 0.0) -> int:
     """The onset sample, from the early rise: a line through the samples of the rise between
     10 % and 40 % of the way from the level before the step (the ``w`` samples before the coarse
     onset, less 3) to the level after it (the median of the ``w`` samples from ``w`` past
     the onset), extrapolated back to the level before. For a first-order rise that line
     meets it about 0.035 tau before the true onset, which is added back (``0.03 span /
     slope``, span/slope being about 1.2 tau); the onset sample is the one nearest that time
-    (a start a sample late or early biases tau by about dt/tau, either way). Kept as found
-    when the rise holds fewer than 2 samples in the band (a rise faster than the
-    sampling)."""
+    (a start a sample late or early biases tau by about dt/tau, either way).
+
+    A rise that is not one smooth curve (a gripper closing in stages: a staircase) bends
+    that line, which then meets the level before far too early. The departure from that
+    level bounds it: the last sample, before the rise's first sample past 10 %, that lies
+    within ``max(4 sigma, 5 % of the step)`` of the level before. An extrapolated onset
+    earlier than the departure by more than the band's own length (a first-order rise's
+    onset lies about a quarter of the band before it), and a rise faster than the sampling
+    (fewer than 2 samples in the band), get the departure."""
     before = x[max(0, onset - w - 3):max(1, onset - 3)]
     after = x[min(onset + w, x.size - 1):min(onset + 2 * w, x.size)]
     if before.size == 0 or after.size == 0:
@@ -102,26 +128,112 @@ def _refine(t: np.ndarray, x: np.ndarray, onset: int, w: int) -> int:
         return onset
     under = np.flatnonzero(share[:past[0]] < 0.1)
     first = under[-1] + 1 if under.size else 0
+    tol = max(4.0 * sigma, 0.05 * abs(span))
+    near = np.flatnonzero(np.abs(x[lo:lo + first + 1] - low) <= tol)
+    departure = lo + (int(near[-1]) if near.size else 0)
     band = np.arange(first, past[0]) + lo
     if band.size < 2 or np.ptp(t[band]) == 0.0:
-        return onset
+        return departure
     slope, intercept = np.polyfit(t[band], x[band] - low, 1)
     if not slope * span > 0:
-        return onset
+        return departure
     # the line meets the level before ~0.035 tau early, and span/slope is ~1.2 tau
     t0 = -intercept / slope + 0.03 * span / slope
-    dt = float(np.median(np.diff(t)))
-    return int(np.clip(np.searchsorted(t, t0 + 0.5 * dt, side="right") - 1, 0, x.size - 1))
+    dt = sample_step_s(t)
+    found = int(np.searchsorted(t, t0 + 0.5 * dt, side="right") - 1)
+    if found < departure - max(2, band.size):  # a staircase, not a smooth rise
+        return departure
+    return int(np.clip(found, lo, min(hi, x.size) - 1))
 
 
-def detect_steps(
+@dataclass(frozen=True)
+class SkippedStep:
+    """A step found but not fitted: ``start_s`` its onset, ``label``, and ``reason``."""
+
+    start_s: float
+    label: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class StepSearch:
+    """What :func:`find_steps` found in one signal: the fittable ``steps``; the ``skipped``
+    ones with why (a step cut by the end of the recording); ``reason``, why there is no
+    step at all (None when there is one); the noise ``sigma`` (signal units), the lag
+    ``lag_s`` of the differences (None before it is chosen), the median run of held
+    samples and the samples dropped as not finite."""
+
+    steps: list[DetectedStep]
+    skipped: list[SkippedStep]
+    reason: str | None
+    sigma: float
+    lag_s: float | None
+    held_run: float
+    dropped: int
+
+    @property
+    def why_not(self) -> str | None:
+        """Why the signal gives nothing to fit (None when it gives a step)."""
+        if self.steps:
+            return None
+        if self.skipped:
+            return "; ".join(f"{k.label} at {k.start_s:.3f} s {k.reason}" for k in self.skipped)
+        return self.reason
+
+
+#: A step back after a step is a relaxation of it (not a release) while the level it settles
+#: at keeps more than this share of the first step's excursion.
+RELAX_SHARE = 0.5
+
+
+def _merge_relaxations(x: np.ndarray, found: list[tuple[int, int]], d: np.ndarray, w: int
+                       ) -> list[tuple[int, int]]:
+    """``found`` (refined start, coarse onset) without the opposite steps that only relax a
+    step: a press that overshoots and creeps back part of the way is one press, whose region
+    runs to the release. A step back whose settled level (the median of ``w`` samples from
+    ``w`` past its coarse onset) keeps more than :data:`RELAX_SHARE` of the excursion of the
+    step before it (from the level before that step to its extreme before the step back) is
+    dropped; one that returns further is a release and stays."""
+    out = list(found)
+    k = 0
+    while k + 1 < len(out):
+        (s0, o0), (s1, o1) = out[k], out[k + 1]
+        if np.sign(d[o0]) == np.sign(d[o1]) or s1 <= s0:
+            k += 1
+            continue
+        base = float(np.median(x[max(0, s0 - w):s0])) if s0 > 0 else float(x[0])
+        sign = np.sign(d[o0])
+        extreme = float(sign * np.max(sign * x[s0:s1]))
+        tail = x[min(o1 + w, x.size - 1):min(o1 + 2 * w, x.size)]
+        settled = float(np.median(tail)) if tail.size else float(x[-1])
+        excursion = extreme - base
+        if excursion != 0.0 and (settled - base) / excursion > RELAX_SHARE:
+            del out[k + 1]  # a relaxation: the first step's region runs on
+        else:
+            k += 1
+    return out
+
+
+def sample_step_s(t: np.ndarray) -> float:
+    """The median positive step of ``t`` (s): the sample period, with repeated timestamps
+    left out; 0 when ``t`` never advances."""
+    d = np.diff(np.asarray(t, dtype=np.float64))
+    d = d[d > 0]
+    return float(np.median(d)) if d.size else 0.0
+
+
+def find_steps(
     t_s: ArrayLike, x: ArrayLike, *, min_snr: float = MIN_SNR,
     min_fraction: float = MIN_FRACTION, min_points: int = 4,
-) -> list[DetectedStep]:
-    """The steps of one signal (see the module doc), in time order; empty when none.
+) -> StepSearch:
+    """The steps of one signal (see the module doc), in time order, and why any were left
+    out. Never raises on a real stream: held (repeated) samples, repeated timestamps, a
+    step cut by the end of the recording, a flat channel, a drifting baseline and
+    non-finite samples (dropped) each give steps or a reason.
 
-    ``t_s`` (n,) increasing seconds, ``x`` (n,) the signal. A step whose region holds fewer
-    than ``min_points`` samples is dropped (it cannot be fitted).
+    ``t_s`` (n,) non-decreasing seconds, ``x`` (n,) the signal. A step whose region holds
+    fewer than ``min_points`` samples is skipped (it cannot be fitted), with its reason.
+    Raises ValueError only for arguments of the wrong shape or range (a caller's bug).
     """
     t = np.asarray(t_s, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)
@@ -131,25 +243,42 @@ def detect_steps(
     if not (min_snr > 0 and 0 < min_fraction <= 1):
         raise ValueError(f"`min_snr` (={min_snr}) must be > 0 and `min_fraction` "
                          f"(={min_fraction}) in (0, 1].")
+    finite = np.isfinite(t) & np.isfinite(x)
+    dropped = int((~finite).sum())
+    t, x = t[finite], x[finite]
+    if t.size > 1 and np.any(np.diff(t) < 0):  # out of order: in time order, stably
+        order = np.argsort(t, kind="stable")
+        t, x = t[order], x[order]
     n = x.size
-    sigma = noise_sigma(x)
-    if n < 2 * min_points or sigma == 0.0 and np.ptp(x) == 0.0:
-        return []
-    sigma = sigma or 1e-300
+    held = held_run_length(x)
+
+    def nothing(reason: str, sigma: float = 0.0, lag_s: float | None = None) -> StepSearch:
+        return StepSearch([], [], reason, sigma, lag_s, held, dropped)
+
+    if n < 2 * min_points:
+        return nothing(f"too short: {n} finite samples, at least {2 * min_points} needed")
+    if np.ptp(x) == 0.0:
+        return nothing("flat: the signal never changes")
+    dt = sample_step_s(t)
+    if dt == 0.0:
+        return nothing("no time passes: every sample has the same timestamp")
+    sigma = noise_sigma(x) or 1e-300
     lags = [1]
     while lags[-1] * 2 <= max(1, n // 4):
         lags.append(lags[-1] * 2)
     peaks = [float(np.max(np.abs(_lagged(x, w)))) for w in lags]
     best = max(peaks)
     w = next(w for w, p in zip(lags, peaks, strict=True) if p >= _SCALE_SHARE * best)
+    lag_s = dt * w
     d = _lagged(x, w)
     z = np.abs(d) / (sigma * np.sqrt(2.0))
     above = z > min_snr
     if not above.any():
-        return []
-    onsets: list[int] = []
+        return nothing(f"no change reaches {min_snr:g} times the noise (the largest is "
+                       f"{float(z.max()):.3g} times; noise {sigma:.3g})", sigma, lag_s)
+    peaks_at: list[int] = []
     i = 0
-    while i < d.size:  # one onset per run of samples above the threshold: its peak
+    while i < d.size:  # one coarse onset per run of samples above the threshold: its peak
         if not above[i]:
             i += 1
             continue
@@ -157,26 +286,56 @@ def detect_steps(
         while j < d.size and above[j] and np.sign(d[j]) == np.sign(d[i]):
             j += 1
         peak = i + int(np.argmax(np.abs(d[i:j])))
-        if onsets and peak - onsets[-1] < 2 * w and np.sign(d[peak]) == np.sign(d[onsets[-1]]):
-            if abs(d[peak]) > abs(d[onsets[-1]]):
-                onsets[-1] = peak
+        if (peaks_at and peak - peaks_at[-1] < 2 * w
+                and np.sign(d[peak]) == np.sign(d[peaks_at[-1]])):
+            if abs(d[peak]) > abs(d[peaks_at[-1]]):
+                peaks_at[-1] = peak
         else:
-            onsets.append(peak)
+            peaks_at.append(peak)
         i = j
-    largest = max(abs(d[o]) for o in onsets)
-    onsets = [o for o in onsets if abs(d[o]) >= min_fraction * largest]
-    onsets = [_refine(t, x, o, w) for o in onsets]
-    dt_end = float(t[-1] - t[-2]) if n > 1 else 0.0
-    bounds = [float(t[o]) for o in onsets] + [float(t[-1]) + dt_end]
-    lag_s = float(np.median(np.diff(t))) * w
-    steps = []
-    for k, o in enumerate(onsets):
-        start, end = bounds[k], bounds[k + 1]
-        if int(((t >= start) & (t < end)).sum()) < min_points:
+    largest = max(abs(d[o]) for o in peaks_at)
+    peaks_at = [o for o in peaks_at if abs(d[o]) >= min_fraction * largest]
+    # the size, sign and SNR of a step are those at its coarse onset (an index into the
+    # lagged differences); only its start moves to the refined onset (an index into x)
+    found: list[tuple[int, int]] = []
+    for o in peaks_at:
+        start = _refine(t, x, o, w, sigma)
+        if found and start <= found[-1][0]:  # two onsets refined onto one sample: one step
+            if abs(d[o]) > abs(d[found[-1][1]]):
+                found[-1] = (found[-1][0], o)
             continue
-        steps.append(DetectedStep(start, end, "rise" if d[o] > 0 else "fall", float(d[o]),
-                                  float(z[o]), lag_s))
-    return steps
+        found.append((start, o))
+    found = _merge_relaxations(x, found, d, w)
+    bounds = [float(t[s]) for s, _ in found] + [float(t[-1]) + dt]
+    steps: list[DetectedStep] = []
+    skipped: list[SkippedStep] = []
+    for k, (_, o) in enumerate(found):
+        start, end = bounds[k], bounds[k + 1]
+        label = "rise" if d[o] > 0 else "fall"
+        count = int(((t >= start) & (t < end)).sum())
+        if count < min_points:
+            last = k == len(found) - 1
+            skipped.append(SkippedStep(start, label, (
+                f"is cut by the end of the recording ({count} samples after its onset, "
+                f"{min_points} needed)" if last else
+                f"holds {count} samples before the next step ({min_points} needed)")))
+            continue
+        steps.append(DetectedStep(start, end, label, float(d[o]), float(z[o]), lag_s))
+    return StepSearch(steps, skipped, None, sigma, lag_s, held, dropped)
+
+
+def detect_steps(
+    t_s: ArrayLike, x: ArrayLike, *, min_snr: float = MIN_SNR,
+    min_fraction: float = MIN_FRACTION, min_points: int = 4,
+) -> list[DetectedStep]:
+    """The steps of one signal (see the module doc), in time order; empty when none
+    (:func:`find_steps` says why).
+
+    ``t_s`` (n,) increasing seconds, ``x`` (n,) the signal. A step whose region holds fewer
+    than ``min_points`` samples is dropped (it cannot be fitted).
+    """
+    return find_steps(t_s, x, min_snr=min_snr, min_fraction=min_fraction,
+                      min_points=min_points).steps
 
 
 def level_before(t: np.ndarray, x: np.ndarray, start: float, end: float) -> float:
@@ -204,7 +363,9 @@ def best_step_start(t_s: ArrayLike, x: ArrayLike, start_s: float, end_s: float, 
     t = np.asarray(t_s, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)
     k = int(np.searchsorted(t, start_s))
-    dt = float(np.median(np.diff(t)))
+    dt = sample_step_s(t)
+    if dt == 0.0 or not np.all(np.isfinite(x)):
+        return start_s
     taus = np.geomspace(0.1 * dt, max(end_s - start_s, 2 * dt), n_tau)
     best, best_start = np.inf, start_s
     for j in range(max(0, k - shifts), min(t.size - 4, k + shifts + 1)):
@@ -226,5 +387,6 @@ def best_step_start(t_s: ArrayLike, x: ArrayLike, start_s: float, end_s: float, 
     return best_start
 
 
-__all__ = ["MIN_FRACTION", "MIN_SNR", "DetectedStep", "best_step_start", "detect_steps",
-           "level_before", "noise_sigma"]
+__all__ = ["MIN_FRACTION", "MIN_SNR", "RELAX_SHARE", "DetectedStep", "SkippedStep", "StepSearch",
+           "best_step_start", "detect_steps", "find_steps", "held_run_length", "level_before",
+           "noise_sigma", "sample_step_s"]

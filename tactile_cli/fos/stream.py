@@ -30,14 +30,14 @@ from __future__ import annotations
 
 import fnmatch
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
 from ..store.trials import TactileFile
-from .step_detect import MIN_SNR, best_step_start, detect_steps, level_before
+from .step_detect import MIN_SNR, best_step_start, find_steps, level_before
 
 REDUCE_MODES: tuple[str, ...] = ("none", "mean")
 STREAM_REGION_MODES: tuple[str, ...] = ("annotations", "detect", "auto")
@@ -75,10 +75,14 @@ class StreamCurve:
 @dataclass(frozen=True)
 class StreamCurves:
     """The curves to fit, and the ``trial/channel`` names of curves with no step found
-    (``regions="detect"`` or ``"auto"``)."""
+    (``regions="detect"`` or ``"auto"``). ``not_fitted``: ``trial/channel`` (or
+    ``trial/channel/region`` for one step left out) -> why nothing (or that step) is fitted:
+    a flat channel, no change above the threshold, a step cut by the end of the
+    recording; every curve searched is either fitted or named here."""
 
     curves: list[StreamCurve]
     no_step: list[str]
+    not_fitted: dict[str, str] = field(default_factory=dict)
 
 
 def match_channels(names: Sequence[str], pattern: str | None) -> list[str]:
@@ -101,10 +105,13 @@ def _numbered(spans: list[tuple[float, float, str]]) -> list[tuple[float, float,
 
 
 def _found_regions(t_s: np.ndarray, x: np.ndarray, *, model: str, want: str | None,
-                   min_snr: float, min_points: int) -> list[tuple[float, float, str]]:
+                   min_snr: float, min_points: int
+                   ) -> tuple[list[tuple[float, float, str]], str | None]:
     """Regions of the steps found in one curve: each step (``rise``/``fall``), or for
-    ``model="pulse"`` a step and the opposite step after it as one ``pulse``."""
-    steps = detect_steps(t_s, x, min_snr=min_snr, min_points=min_points)
+    ``model="pulse"`` a step and the opposite step after it as one ``pulse``; and why there
+    is none (None when there is one)."""
+    search = find_steps(t_s, x, min_snr=min_snr, min_points=min_points)
+    steps = search.steps
     spans = [(s.start_s, s.end_s, s.label) for s in steps]
     if model == "step":  # the start a first-order step fits best, of the found one +- 1
         spans = [(best_step_start(t_s, x, a, b), b, label) for a, b, label in spans]
@@ -117,7 +124,15 @@ def _found_regions(t_s: np.ndarray, x: np.ndarray, *, model: str, want: str | No
             else:
                 k += 1
         spans = pulses
-    return _numbered([sp for sp in spans if want is None or sp[2] == want])
+    kept = _numbered([sp for sp in spans if want is None or sp[2] == want])
+    if kept:
+        return kept, None
+    why = search.why_not
+    if why is None:  # steps, but none of the kind asked for
+        labels = sorted({sp[2] for sp in spans}) or sorted({s.label for s in steps})
+        why = (f"no {want or model} region among the steps found "
+               f"({', '.join(labels) or 'none paired'})")
+    return [], why
 
 
 def _duration(seconds: float) -> str:
@@ -201,6 +216,7 @@ def read_stream_curves(
                 max_curves=max_curves)
     out: list[StreamCurve] = []
     no_step: list[str] = []
+    not_fitted: dict[str, str] = {}
     for name in tf.trial_names:
         trial = tf.trial(name)
         if not trial.has_signal(stream):
@@ -241,13 +257,19 @@ def read_stream_curves(
         for c, label in enumerate(labels):
             spans = shared
             if spans is None:
-                spans = _found_regions(sig.t_s, data[:, c], model=model, want=want,
-                                       min_snr=min_snr, min_points=min_points)
+                spans, why = _found_regions(sig.t_s, data[:, c], model=model, want=want,
+                                            min_snr=min_snr, min_points=min_points)
                 if not spans:
                     no_step.append(f"{name}/{label}")
+                    not_fitted[f"{name}/{label}"] = why or "no step found"
                     continue
             for start, end, region in spans:
                 inside = (sig.t_s >= start) & (sig.t_s < end)
+                if inside.sum() < min_points and shared is None:  # a found step: named
+                    not_fitted[f"{name}/{label}/{region}"] = (
+                        f"holds {int(inside.sum())} samples from its start, {min_points} "
+                        "needed")
+                    continue
                 if inside.sum() < min_points:
                     raise InputError(f"the {region!r} interval [{start:g}, {end:g}) s holds "
                                      f"{int(inside.sum())} samples of stream {stream!r}; at "
@@ -258,10 +280,12 @@ def read_stream_curves(
                                        data[inside, c] - base, units[c] or "units", start,
                                        end, base))
     if not out:
+        reasons = sorted({why.split(" (")[0].split(":")[0] for why in not_fitted.values()})
         raise InputError(f"no step found in stream {stream!r} ({len(no_step)} curve(s) "
-                         f"searched, threshold {min_snr:g} times the noise); lower "
-                         "`min_snr` or annotate the regions", path=path)
-    return StreamCurves(out, no_step)
+                         f"searched, threshold {min_snr:g} times the noise; "
+                         f"{', '.join(reasons) or 'none'}); lower `min_snr` or annotate "
+                         "the regions", path=path)
+    return StreamCurves(out, no_step, not_fitted)
 
 
 __all__ = ["MAX_CURVES", "REDUCE_MODES", "STREAM_REGION_MODES", "StreamCurve", "StreamCurves",

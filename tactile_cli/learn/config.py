@@ -62,8 +62,12 @@ SUMMARY_FEATURES: tuple[str, ...] = ("mean", "std", "min", "max", "last", "slope
 LEVEL_FREE_FEATURES: tuple[str, ...] = ("range", "diff_std", "skew", "kurtosis")
 #: Every name ``model.features`` accepts.
 FEATURE_NAMES: tuple[str, ...] = SUMMARY_FEATURES + LEVEL_FREE_FEATURES
-#: Model families of the registry (``model.family``).
-FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp")
+#: Model families that are not networks (issue 34, item 3): scikit-learn estimators on
+#: window features or raw vectors, stored and exported as ONNX (:mod:`.classic`).
+CLASSIC_FAMILIES: tuple[str, ...] = ("logistic", "random_forest", "hist_gb", "svm")
+#: Model families of the registry (``model.family``): the networks, then the classic ones.
+FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp",
+                             "cnn2d_layout", *CLASSIC_FAMILIES)
 
 
 #: Upper bounds of sizes (see the module docstring): far above any real use, low enough
@@ -333,10 +337,109 @@ class MlpConfig(_Family):
     :data:`LEVEL_FREE_FEATURES`); default the six of :data:`SUMMARY_FEATURES`."""
 
 
+class Cnn2dLayoutConfig(_Family):
+    """2-D convolutions over the channels laid out as an image at their places on the sensor
+    (:mod:`.layout_cnn`, :mod:`.layouts`; the electrode image of arXiv 1809.05551)."""
+
+    family: Literal["cnn2d_layout"]
+    layout: str = "biotac_sp"
+    """A named electrode layout (:data:`.layouts.LAYOUTS`); ``data.channels`` lists whole
+    sensors of it, each in the layout's electrode order."""
+    cell_mm: float = Field(default=1.5, gt=0, le=1000)
+    """Size of one image cell on the sensor (mm); every electrode must get its own cell."""
+    fill: Literal["zero", "nearest"] = "nearest"
+    """Cells without an electrode: 0, or the value of the nearest electrode."""
+    channels: list[_Width] = Field(default=[16, 32], min_length=1, max_length=_MAX_LIST)
+    kernel: int = Field(default=3, ge=1, le=_MAX_WIDTH)
+    """Odd, so that 'same' padding centres it."""
+
+    _odd = field_validator("kernel")(_odd_kernel)
+
+    @model_validator(mode="after")
+    def _grid(self) -> Cnn2dLayoutConfig:
+        from .layouts import layout_grid  # numpy only
+
+        layout_grid(self.layout, cell_mm=self.cell_mm, fill=self.fill)  # ValueError: the key
+        return self
+
+
+class _Classic(_Model):
+    """Keys every classic family shares (:mod:`.classic`): what a window becomes."""
+
+    input: Literal["features", "raw"] = "features"
+    """``features``: the window's summary features per channel (as the MLP's, feature-major);
+    ``raw``: the window's samples flattened (window x channels values, sample-major)."""
+    features: list[Literal["mean", "std", "min", "max", "last", "slope"]] = Field(
+        default=list(SUMMARY_FEATURES), min_length=1, max_length=len(SUMMARY_FEATURES))
+    """With ``input: features``: which summary features, in this order."""
+    standardise: bool = True
+    """Scale each input value to zero mean and unit variance over the training windows
+    (inside the stored model)."""
+
+    @model_validator(mode="after")
+    def _inputs(self) -> _Classic:
+        if len(set(self.features)) != len(self.features):
+            raise ValueError(f"`features` has duplicates: {self.features}")
+        if self.input == "raw" and list(self.features) != list(SUMMARY_FEATURES):
+            raise ValueError("`features` applies to `input: features`; `input: raw` feeds "
+                             "the window's samples")
+        return self
+
+
+class LogisticConfig(_Classic):
+    """Multinomial logistic regression (L2, lbfgs)."""
+
+    family: Literal["logistic"]
+    c: float = Field(default=1.0, gt=0, le=1e12)
+    """Inverse regularisation strength (scikit-learn's ``C``)."""
+    max_iter: int = Field(default=1000, ge=1, le=1_000_000)
+
+
+class RandomForestConfig(_Classic):
+    """A random forest of ``trees`` trees (bootstrap, Gini)."""
+
+    family: Literal["random_forest"]
+    trees: int = Field(default=200, ge=1, le=100_000)
+    max_depth: int | None = Field(default=None, ge=1, le=1000)
+    min_samples_leaf: int = Field(default=1, ge=1, le=_MAX_SAMPLES)
+    max_features: Literal["sqrt", "log2", "all"] = "sqrt"
+    """Features tried per split."""
+
+
+class HistGbConfig(_Classic):
+    """Histogram gradient boosting (scikit-learn's HistGradientBoostingClassifier), no early
+    stopping: ``max_iter`` rounds."""
+
+    family: Literal["hist_gb"]
+    max_iter: int = Field(default=200, ge=1, le=100_000)
+    learning_rate: float = Field(default=0.1, gt=0, le=10)
+    max_leaf_nodes: int = Field(default=31, ge=2, le=100_000)
+    max_depth: int | None = Field(default=None, ge=1, le=1000)
+    min_samples_leaf: int = Field(default=20, ge=1, le=_MAX_SAMPLES)
+    l2_regularization: float = Field(default=0.0, ge=0, le=1e12)
+
+
+class SvmConfig(_Classic):
+    """A support-vector classifier (one-against-one), its decision values calibrated to
+    probabilities by Platt's sigmoid over ``calibration_folds`` folds of the training
+    windows (scikit-learn's CalibratedClassifierCV, ``ensemble=False``)."""
+
+    family: Literal["svm"]
+    kernel: Literal["linear", "rbf"] = "rbf"
+    c: float = Field(default=1.0, gt=0, le=1e12)
+    """Scikit-learn's ``C``."""
+    gamma: Literal["scale", "auto"] | Annotated[float, Field(gt=0, le=1e12)] = "scale"
+    """RBF width: a number, or scikit-learn's ``scale`` / ``auto``."""
+    calibration_folds: int = Field(default=5, ge=2, le=100)
+
+
 ModelConfig = Annotated[
-    LstmConfig | Cnn1dConfig | Cnn2dSpectrogramConfig | FnnConfig | MlpConfig,
+    LstmConfig | Cnn1dConfig | Cnn2dSpectrogramConfig | FnnConfig | MlpConfig
+    | Cnn2dLayoutConfig | LogisticConfig | RandomForestConfig | HistGbConfig | SvmConfig,
     Field(discriminator="family"),
 ]
+#: The config classes of the classic families.
+CLASSIC_CONFIGS = (LogisticConfig, RandomForestConfig, HistGbConfig, SvmConfig)
 
 
 class OptimConfig(_Model):
@@ -381,6 +484,13 @@ class TrainConfig(_Model):
             raise ValueError(
                 f"model.n_fft (={m.n_fft}) must be <= data.window (={self.data.window})"
             )
+        if isinstance(m, CLASSIC_CONFIGS):
+            kinds = [t.kind for t in self.data.targets]
+            if kinds != ["classification"]:
+                raise ValueError(
+                    f"model.family {m.family} predicts one classification target; "
+                    f"data.targets has {len(kinds)} ({', '.join(kinds)}): use a network "
+                    "family for regression or several heads")
         return self
 
     def with_overrides(self, *, seed: int | None = None, epochs: int | None = None
@@ -440,6 +550,10 @@ def memory_estimate(cfg: TrainConfig) -> tuple[float, str, str, tuple[Any, ...]]
     d, m, o = cfg.data, cfg.model, cfg.optim
     c, w, b = len(d.channels), d.window, o.batch_size
     sizes: list[tuple[tuple[Any, ...], int]] = [(("data", "window"), w)]
+    if isinstance(m, CLASSIC_CONFIGS):  # no batches: the windows' inputs, as float64
+        return (8.0 * w * c * b, f"`data.window` (={w})",
+                f"for the inputs of {b} windows of {w} samples x {c} channels",
+                ("data", "window"))
     if isinstance(m, LstmConfig):
         h = m.hidden
         params = 4 * (c * h + h * h + 2 * h) + (m.layers - 1) * 4 * (2 * h * h + 2 * h)
@@ -459,6 +573,16 @@ def memory_estimate(cfg: TrainConfig) -> tuple[float, str, str, tuple[Any, ...]]
         sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
         sizes.append((("model", "kernel"), m.kernel))
         out = m.channels[-1] * max(1, w // m.pool ** len(m.channels))
+    elif isinstance(m, Cnn2dLayoutConfig):
+        from .layouts import layout_grid
+
+        rows, cols = layout_grid(m.layout, cell_mm=m.cell_mm, fill=m.fill).shape
+        chans = [w * max(1, c // layout_grid(m.layout).n_electrodes), *m.channels]
+        params = sum(a * b_ * m.kernel ** 2 for a, b_ in zip(chans, chans[1:], strict=False))
+        acts = 2 * b * rows * cols * sum(m.channels)
+        sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
+        sizes.append((("model", "kernel"), m.kernel))
+        out = m.channels[-1] * rows * cols
     else:  # the spectrogram CNN
         cells = (m.n_fft // 2 + 1) * (w // m.hop + 1)
         chans = [c, *m.channels]
@@ -518,7 +642,9 @@ _ALLOWED: dict[tuple[str, ...], type[BaseModel]] = {
 }
 _FAMILY_MODELS: dict[str, type[BaseModel]] = {
     "lstm": LstmConfig, "cnn1d": Cnn1dConfig, "cnn2d_spectrogram": Cnn2dSpectrogramConfig,
-    "fnn": FnnConfig, "mlp": MlpConfig,
+    "fnn": FnnConfig, "mlp": MlpConfig, "cnn2d_layout": Cnn2dLayoutConfig,
+    "logistic": LogisticConfig, "random_forest": RandomForestConfig, "hist_gb": HistGbConfig,
+    "svm": SvmConfig,
 }
 
 
@@ -547,7 +673,9 @@ def _describe(err: dict[str, Any], keys: tuple[Any, ...]) -> str:
     return f"`{key}`: {msg}{shown}"
 
 
-__all__ = ["FAMILIES", "FEATURE_NAMES", "LEVEL_FREE_FEATURES", "SUMMARY_FEATURES",
-           "AugmentConfig", "BaselineConfig", "Cnn1dConfig", "Cnn2dSpectrogramConfig",
-           "DataConfig", "FnnConfig", "LstmConfig", "MlpConfig", "ModelConfig", "OptimConfig",
-           "SplitConfig", "TargetConfig", "TrainConfig", "load_config", "parse_config"]
+__all__ = ["CLASSIC_CONFIGS", "CLASSIC_FAMILIES", "FAMILIES", "FEATURE_NAMES",
+           "LEVEL_FREE_FEATURES", "SUMMARY_FEATURES", "AugmentConfig", "BaselineConfig",
+           "Cnn1dConfig", "Cnn2dLayoutConfig", "Cnn2dSpectrogramConfig", "DataConfig",
+           "FnnConfig", "HistGbConfig", "LogisticConfig", "LstmConfig", "MlpConfig",
+           "ModelConfig", "OptimConfig", "RandomForestConfig", "SplitConfig", "SvmConfig",
+           "TargetConfig", "TrainConfig", "load_config", "parse_config"]

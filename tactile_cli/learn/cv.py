@@ -481,7 +481,7 @@ def evaluate_cv(
         data=data_records(paths, trials), overlaps_training=[],
         n_trials=len(trials), n_windows=len(pooled), heads=metrics,
         n_params=count_parameters(model0), size_mb=state_size_bytes(model0) / 1e6,
-        file_size_bytes=(first.path / runs.MODEL_PT).stat().st_size, latency=lat,
+        file_size_bytes=first.weights_path.stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, first.input), notes=notes,
         cv=cv_record, origin=data_origin(paths),

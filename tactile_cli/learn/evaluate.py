@@ -141,7 +141,7 @@ def evaluate(
         data=data_records(paths, trials), overlaps_training=overlaps(paths, run.info),
         n_trials=len(trials), n_windows=len(ws), heads=metrics,
         n_params=count_parameters(model), size_mb=state_size_bytes(model) / 1e6,
-        file_size_bytes=(run.path / runs.MODEL_PT).stat().st_size, latency=lat,
+        file_size_bytes=run.weights_path.stat().st_size, latency=lat,
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, run.input), notes=notes,
         origin=data_origin(paths), extra=extra,

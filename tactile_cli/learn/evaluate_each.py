@@ -122,6 +122,7 @@ def evaluate_each(
     check_outputs([eval_dir / name for name in seen], paths)
     check_output_folder(eval_dir, merge=True)  # a file there, or a folder not writable
     model_mtime = max(newest_mtime(p) for p in (run_dir / runs.MODEL_PT,
+                                               run_dir / runs.MODEL_ONNX,
                                                run_dir / runs.RUN_JSON) if p.exists())
     items = []
     for path in paths:

@@ -46,6 +46,7 @@ from ..input_guard import check_outputs
 from ..store.atomic import atomic_file, check_output_file
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
+from .config import CLASSIC_FAMILIES
 from .data import Normalisation, TrialSeries, WindowSet, make_windows
 from .heads import HeadSpec
 from .models import MultiTaskNet
@@ -59,9 +60,14 @@ INPUT_NAME = "window"
 #: Families each format can carry. Every family of :data:`.models.REGISTRY` exports to both
 #: (the CNN-2D's ``torch.stft`` becomes ONNX ``DFT``); a family added later that does not is
 #: refused by name until it does.
+#: The classic families (scikit-learn, :mod:`.classic`) go to ONNX only: their stored model
+#: is an ONNX graph already, which the export puts behind the preprocessing
+#: (:func:`.classic_onnx.deployed_graph`); TorchScript has no form for them.
 EXPORTABLE: dict[str, frozenset[str]] = {
-    "onnx": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp"}),
-    "torchscript": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp"}),
+    "onnx": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp", "cnn2d_layout",
+                       *CLASSIC_FAMILIES}),
+    "torchscript": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp",
+                              "cnn2d_layout"}),
 }
 
 
@@ -243,8 +249,56 @@ def _write_torchscript(model: DeployedModel, example: Tensor, tmp: Path,
 
 
 def _sources(run: runs.Run) -> list[dict[str, str]]:
-    names = (runs.RUN_JSON, runs.CONFIG_YAML, runs.MODEL_PT, runs.NORMALISATION_JSON)
+    names = (runs.RUN_JSON, runs.CONFIG_YAML, run.weights_path.name, runs.NORMALISATION_JSON)
     return [{"path": str(run.path / n), "sha256": sha256_of(run.path / n)} for n in names]
+
+
+#: Largest difference of a classic export's outputs from the run's own model with the
+#: toolkit's preprocessing (:class:`DeployedModel`) on seeded probe windows.
+CLASSIC_PROBE_TOL = 1e-5
+
+
+def _probe_windows(run: runs.Run, n: int = 64) -> np.ndarray:
+    """(n, W, C) float32 raw windows around the training data: seeded normal values of the
+    (transformed) channel means and stds, transformed back to sensor units."""
+    d, norm = run.config.data, run.normalisation
+    rng = np.random.default_rng(0)
+    v = norm.mean + norm.std * rng.standard_normal((n, d.window, len(d.channels)))
+    if norm.transform == "signed_log1p":
+        v = np.sign(v) * np.expm1(np.abs(v))
+    return v.astype(np.float32)
+
+
+def _write_classic_onnx(run: runs.Run, tmp: Path, sidecar: dict[str, Any]) -> None:
+    """A classic run's stored ONNX graph behind the preprocessing, with the sidecar in its
+    metadata; checked against :class:`DeployedModel` of the run's own model (the toolkit's
+    preprocessing in torch) on probe windows, so that a preprocessing step the graph does
+    not reproduce is an error and not a silent difference."""
+    import onnx
+
+    from .classic_onnx import deployed_graph, run_graph, session
+
+    net = run.load_model()
+    norm, d = run.normalisation, run.config.data
+    (name,) = output_names(run.heads)
+    proto = deployed_graph(net.model_bytes, transform=norm.transform,  # type: ignore[arg-type]
+                           normalise=norm.enabled, mean=norm.mean, std=norm.std,
+                           window_norm=d.window_norm, output_name=name, input_name=INPUT_NAME)
+    sidecar["model"]["opset"] = int(next(o.version for o in proto.opset_import
+                                         if o.domain in ("", "ai.onnx")))
+    entry = proto.metadata_props.add()
+    entry.key, entry.value = "tactile.export", json.dumps(sidecar)
+    probe = _probe_windows(run)
+    with torch.inference_mode():
+        mine = DeployedModel(net, norm, window_norm=d.window_norm)(torch.from_numpy(probe))
+    theirs = run_graph(session(proto.SerializeToString()), probe)
+    diff = float(np.max(np.abs(theirs - mine[0].numpy())))
+    if not diff <= CLASSIC_PROBE_TOL:
+        raise InputError(f"the exported graph differs from the run's model with its "
+                         f"preprocessing by {diff:.3g} on probe windows (more than "
+                         f"{CLASSIC_PROBE_TOL:g}): a preprocessing step the classic export "
+                         "does not reproduce; evaluate the run in place", path=run.path)
+    onnx.save(proto, str(tmp))
 
 
 def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) -> dict[str, Any]:
@@ -261,6 +315,9 @@ def sidecar_record(run: runs.Run, fmt: str, model_file: str, *, command: str) ->
         import onnxruntime
 
         versions |= {"onnx": onnx.__version__, "onnxruntime": onnxruntime.__version__}
+    if run.config.model.family in CLASSIC_FAMILIES:
+        versions |= {k: v for k, v in (run.info.get("versions") or {}).items()
+                     if k in ("scikit-learn", "skl2onnx")}
     return {
         "format": EXPORT_FORMAT, "format_version": EXPORT_FORMAT_VERSION,
         "tool_version": __version__, "created_utc": utc_now(), "command": command,
@@ -339,7 +396,8 @@ def export_run(run_dir: str | Path, out: str | Path, *,
     if family not in EXPORTABLE[format]:
         raise InputError(f"the {family} family cannot be exported to {format} (exportable: "
                          f"{', '.join(sorted(EXPORTABLE[format]))})", path=run.path)
-    model = deployed_model(run)
+    classic = family in CLASSIC_FAMILIES
+    model = None if classic else deployed_model(run)
     d = run.config.data
     # batch 2: an exporter specialises a size-1 dimension, and the batch axis must stay free
     example = torch.from_numpy(np.random.default_rng(0).standard_normal(
@@ -350,7 +408,9 @@ def export_run(run_dir: str | Path, out: str | Path, *,
     with atomic_file(side, overwrite=overwrite) as tmp_side, \
             atomic_file(out, overwrite=overwrite) as tmp_model:
         try:
-            if format == "onnx":
+            if model is None:
+                _write_classic_onnx(run, tmp_model, record)
+            elif format == "onnx":
                 _write_onnx(model, example, tmp_model, record)
             else:
                 _write_torchscript(model, example, tmp_model, record)
@@ -470,15 +530,16 @@ def check_exported(path: str | Path, run: runs.Run, model: MultiTaskNet, ws: Win
     difference of its outputs from the package's (``ws``: the normalised windows;
     ``raw``: the same windows raw) and, with ``latency``, its batch-1 latency on up to
     2,048 of them (the seeded pick of :func:`.metrics.measure_latency_of`). A file exported
-    from another run (its sidecar's model.pt SHA-256) is an InputError."""
+    from another run (its sidecar's model.pt or model.onnx SHA-256) is an InputError."""
     exported = ExportedModel(path, threads=1 if threads is None else threads)
     side = exported.sidecar
-    want = sha256_of(run.path / runs.MODEL_PT)
+    want = sha256_of(run.weights_path)
     have = {s.get("sha256") for s in side.get("run", {}).get("sources", [])
-            if isinstance(s, dict) and str(s.get("path", "")).endswith(runs.MODEL_PT)}
+            if isinstance(s, dict) and str(s.get("path", "")).endswith(run.weights_path.name)}
     if want not in have:
-        raise InputError(f"was exported from another run than {run.path} (its model.pt "
-                         "differs); export this run with `tactile export`", path=path)
+        raise InputError(f"was exported from another run than {run.path} (its "
+                         f"{run.weights_path.name} differs); export this run with "
+                         "`tactile export`", path=path)
     mine = package_outputs(model, ws, run.heads, run.normalisation.targets)
     theirs = exported(raw)
     record: dict[str, Any] = {

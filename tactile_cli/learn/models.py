@@ -1,4 +1,4 @@
-"""The model registry: five network families with multi-task heads, and their loss.
+"""The model registry: six network families with multi-task heads, and their loss.
 
 Every network takes a batch of normalised windows ``(batch, window, channels)`` float32
 and returns one output per head: ``(batch, n_classes)`` logits for a classification head,
@@ -16,6 +16,12 @@ turns a window into a feature vector; the heads are small fully connected networ
 - ``mlp``: fully connected layers on per-channel summary features of the window (mean,
   std, min, max, last, slope; computed inside the model, so latency includes them, and
   standardised by training statistics held in buffers).
+- ``cnn2d_layout``: the channels laid out as an image at their places on the sensor (an
+  electrode layout such as the BioTac SP's), 2-D convolutions, flattened
+  (:mod:`.layout_cnn`; issue 34).
+
+The classic families (logistic regression, random forest, gradient boosting, SVM) are not
+networks and not in this registry: :mod:`.classic`.
 
 The loss of several heads is paper 001's eq. 3, ``TL = CE_motion + CE_texture + L2_speed``,
 with a configurable weight per head: ``sum_h w_h loss_h`` (cross-entropy, optionally
@@ -41,6 +47,7 @@ from .config import (
     ModelConfig,
 )
 from .heads import HeadSpec
+from .layout_cnn import LayoutCnnTrunk
 
 
 def _dense(in_features: int, sizes: Sequence[int], dropout: float) -> tuple[nn.Sequential, int]:
@@ -220,6 +227,7 @@ REGISTRY: dict[str, Callable[..., nn.Module]] = {
     "cnn2d_spectrogram": Cnn2dSpectrogramTrunk,
     "fnn": FnnTrunk,
     "mlp": MlpTrunk,
+    "cnn2d_layout": LayoutCnnTrunk,
 }
 
 
@@ -258,11 +266,20 @@ def build_model(cfg: ModelConfig, *, window: int, n_channels: int,
 
 
 def count_parameters(model: nn.Module) -> int:
+    """Trained numbers of the model: its parameters, or for a classic family
+    (:class:`.classic.ClassicNet`) the numbers its estimator stores (``n_parameters``)."""
+    stored = getattr(model, "n_parameters", None)
+    if stored is not None:
+        return int(stored)
     return int(sum(p.numel() for p in model.parameters()))
 
 
 def state_size_bytes(model: nn.Module) -> int:
-    """Bytes of the tensors in the state dict (parameters and persistent buffers)."""
+    """Bytes of the tensors in the state dict (parameters and persistent buffers), or of a
+    classic family's stored ONNX model (``size_bytes``)."""
+    stored = getattr(model, "size_bytes", None)
+    if stored is not None:
+        return int(stored)
     return int(sum(t.numel() * t.element_size() for t in model.state_dict().values()))
 
 

@@ -11,6 +11,8 @@ A run folder (format ``tactile-run`` version 1)::
                              see inputs.py; absent in runs trained before issue 10)
       config.resolved.yaml   the validated config with every default filled in
       model.pt               torch.save(state_dict); load with torch.load(weights_only=True)
+                             (model.onnx instead for a classic family: the estimator as
+                             ONNX, read by onnxruntime; see classic.py)
       normalisation.json     per-channel mean/std (training split only), regression-target
                              and summary-feature statistics
       history.csv            one row per epoch: train/val loss, val accuracy, seconds
@@ -41,7 +43,7 @@ from ..errors import InputError
 from ..input_guard import note_input
 from ..store.atomic import write_text
 from ..store.outdir import output_folder
-from .config import TrainConfig, parse_config
+from .config import CLASSIC_FAMILIES, TrainConfig, parse_config
 from .data import Normalisation
 from .heads import HeadSpec
 from .inputs import InputSpec
@@ -55,6 +57,7 @@ EVAL_FORMAT_VERSION = 1
 RUN_JSON = "run.json"
 CONFIG_YAML = "config.resolved.yaml"
 MODEL_PT = "model.pt"
+MODEL_ONNX = "model.onnx"  # the stored model of a classic family (learn/classic.py)
 NORMALISATION_JSON = "normalisation.json"
 HISTORY_CSV = "history.csv"
 CURVES_PNG = "curves.png"
@@ -111,9 +114,22 @@ class Run:
     normalisation: Normalisation
     input: InputSpec | None = None
 
+    @property
+    def weights_path(self) -> Path:
+        """The file of the trained model: ``model.pt``, or ``model.onnx`` for a classic
+        family (:mod:`.classic`)."""
+        if self.config.model.family in CLASSIC_FAMILIES:
+            return self.path / MODEL_ONNX
+        return self.path / MODEL_PT
+
     def load_model(self) -> MultiTaskNet:
         """The network with its trained weights (``torch.load(weights_only=True)``), in
-        eval mode."""
+        eval mode; for a classic family its stored ONNX model as a
+        :class:`.classic.ClassicNet` (which evaluation uses as it uses a network)."""
+        if self.config.model.family in CLASSIC_FAMILIES:
+            from .classic import load_classic
+
+            return load_classic(self)  # type: ignore[return-value]
         d = self.config.data
         model = build_model(self.config.model, window=d.window, n_channels=len(d.channels),
                             heads=self.heads)
@@ -461,7 +477,8 @@ def run_files(path: str | Path) -> list[Path]:
 
 
 __all__ = ["CONFIG_YAML", "CURVES_PNG", "EVAL_DIR", "EVAL_FORMAT", "EVAL_FORMAT_VERSION",
-           "HISTORY_CSV", "METRICS_JSON", "MODEL_PT", "NORMALISATION_JSON", "PREDICTIONS_CSV",
+           "HISTORY_CSV", "METRICS_JSON", "MODEL_ONNX", "MODEL_PT", "NORMALISATION_JSON",
+           "PREDICTIONS_CSV",
            "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "checked_record",
            "dumps",
            "eval_dir_name", "json_safe", "load_run", "read_metrics", "read_run_config",

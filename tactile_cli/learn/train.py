@@ -32,7 +32,7 @@ from ..interrupt import raise_if_requested
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
-from .config import TrainConfig
+from .config import CLASSIC_FAMILIES, TrainConfig
 from .data import (
     Normalisation,
     TrialSeries,
@@ -264,6 +264,12 @@ def train(
     data and the resolved names saved. Returns the summary; raises :class:`InputError` for
     bad data.
     """
+    if config.model.family in CLASSIC_FAMILIES:  # scikit-learn, stored as ONNX (issue 34)
+        from .classic import train_classic
+
+        return train_classic(config, data_paths, out, config_path=config_path,
+                             overwrite=overwrite, command=command, on_epoch=on_epoch,
+                             on_start=on_start, given=given)
     started = time.perf_counter()
     out = Path(out)
     if out.exists() and out.is_dir() and not overwrite:
