@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.ingest import IngestOptions, ingest
+from tactile_cli.ingest import ingest
 from tactile_cli.spectral import limit_bandwidth, lowest_cutoff_hz
 
 runner = CliRunner()
@@ -27,7 +27,7 @@ def recording(tmp_path_factory) -> Path:
                                            "duration_s": 1.0})
     simulate_vibro_slip(cfg, root / "scene", seed=0)
     out = root / "rec.h5"
-    ingest([root / "scene"], out, options=IngestOptions(format="accel-tree"))
+    ingest([root / "scene"], out, format="accel-tree")
     return out
 
 

@@ -1,9 +1,6 @@
 """`spectral._tracking`: sliding spectra and band tracking (paper 003, sec. 2.4: an
 accelerometer at 2.5 kHz, a spectrogram refreshed at 100 Hz, the peak amplitude in
-570-580 Hz or the peak frequency of a resonance, smoothed by a moving average).
-
-``moving_average`` is tested under its current name (another branch renames it to
-``causal_moving_average``)."""
+570-580 Hz or the peak frequency of a resonance, smoothed by a moving average)."""
 
 from __future__ import annotations
 
@@ -18,7 +15,7 @@ from tactile_cli.spectral import (
     SpectrumTracker,
     band_peak,
     frame_spectra,
-    moving_average,
+    causal_moving_average,
 )
 
 RATE = 2500.0
@@ -178,26 +175,26 @@ def test_band_peak_rejects_a_band_without_bins(band):
 
 def test_moving_average_is_the_causal_trailing_mean():
     x = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
-    np.testing.assert_allclose(moving_average(x, 2), [1.0, 1.5, 2.5, 3.5, 4.5])
-    np.testing.assert_allclose(moving_average(x, 3), [1.0, 1.5, 2.0, 3.0, 4.0])
-    np.testing.assert_array_equal(moving_average(x, 1), x)
-    np.testing.assert_allclose(moving_average(x, 50), np.cumsum(x) / np.arange(1, 6))
-    assert moving_average(np.zeros(0), 4).shape == (0,)
+    np.testing.assert_allclose(causal_moving_average(x, 2), [1.0, 1.5, 2.5, 3.5, 4.5])
+    np.testing.assert_allclose(causal_moving_average(x, 3), [1.0, 1.5, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(causal_moving_average(x, 1), x)
+    np.testing.assert_allclose(causal_moving_average(x, 50), np.cumsum(x) / np.arange(1, 6))
+    assert causal_moving_average(np.zeros(0), 4).shape == (0,)
 
 
 def test_moving_average_uses_nothing_after_each_sample():
     rng = np.random.default_rng(3)
     x = rng.standard_normal(200)
-    y = moving_average(x, 50)
+    y = causal_moving_average(x, 50)
     changed = x.copy()
     changed[120:] += 100.0
-    np.testing.assert_array_equal(moving_average(changed, 50)[:120], y[:120])
+    np.testing.assert_array_equal(causal_moving_average(changed, 50)[:120], y[:120])
     np.testing.assert_allclose(y[120], x[71:121].mean(), rtol=1e-12)
 
 
 def test_moving_average_rejects_empty_windows():
     with pytest.raises(ValueError, match=r"^`n` \(=0\) must be >= 1$"):
-        moving_average(np.ones(3), 0)
+        causal_moving_average(np.ones(3), 0)
 
 
 @pytest.mark.parametrize("chunks", [[1] * 300, [7] * 50, [249, 1, 250, 3], [1000],
