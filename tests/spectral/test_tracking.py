@@ -14,8 +14,8 @@ from tactile_cli.spectral import (
     FrameSpectra,
     SpectrumTracker,
     band_peak,
-    frame_spectra,
     causal_moving_average,
+    frame_spectra,
 )
 
 RATE = 2500.0
