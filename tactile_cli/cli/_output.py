@@ -67,7 +67,7 @@ def print_blocks(blocks: Sequence[str | TextTable], *,
     console = Console(width=columns)
     for item in items:
         if isinstance(item, str):
-            console.print(item, markup=False, highlight=False)
+            console.print(item, markup=False, highlight=False, soft_wrap=True)
         else:
             console.print(item)
 

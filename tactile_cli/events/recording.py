@@ -241,8 +241,8 @@ def accumulate_file(
         raise InputError(f"`smooth_bins` (={smooth_bins}) must be an odd number of bins >= 1 "
                          "(a centred moving average); pass e.g. `smooth_bins=5`")
     if smooth_bins % 2 == 0:
-        raise InputError(f"`smooth_bins` {smooth_bins} must be odd (a centred moving average); "
-                         f"use {smooth_bins + 1}")
+        raise InputError(f"`smooth_bins` (={smooth_bins}) must be odd (a centred moving "
+                         f"average); pass e.g. `smooth_bins={smooth_bins + 1}`")
     if not path.is_file():
         raise InputError("file not found", path=path)
     _check_outputs(path, out=out, csv=csv, plot=plot, overwrite=overwrite)

@@ -101,7 +101,7 @@ def test_bin_events_other_bin_widths_and_stack():
         ({"p": np.array([1, 0, -1], np.int8)}, "`p` holds 0; polarities must be -1 or +1"),
         ({"t_us": np.array([0.0, 1.0, 2.0])}, "`t_us` must hold integer microseconds"),
         ({"bin_s": 0.0000015}, "`bin_s` (=1.5e-06) must be a whole number of microseconds"),
-        ({"bin_s": -0.02}, "`bin_s` (=-0.02) must be a positive number of seconds"),
+        ({"bin_s": -0.02}, "`bin_s` (=-0.02) must be positive and at most a day (86400 s)"),
         ({"end_us": 0, "start_us": 5}, "`end_us` (=0) must be later than `start_us` (=5)"),
     ],
 )

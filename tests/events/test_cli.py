@@ -144,7 +144,8 @@ def test_out_file_is_schema_valid_with_counts_labels_and_provenance(recording, t
     ("args", "message"),
     [
         (["-t", "nope"], "{path}: no trial 'nope'; the file has 3 trial(s): run_a, run_b, noise"),
-        (["--smooth", "4"], "--smooth 4 must be odd (a centred moving average); use 5"),
+        (["--smooth", "4"], "--smooth (=4) must be odd (a centred moving average); pass e.g. "
+         "--smooth 5"),
         (["--bin-ms", "0.0015"], "bin width 0.0015 ms is not a whole number of microseconds; "
                                  "pass e.g. --bin-ms 20"),
     ],

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tactile_cli.spectral import band_power, bandwidth_steps, limit_bandwidth
+from tactile_cli.spectral import band_power, bandwidth_steps, limit_bandwidth, lowest_cutoff_hz
 
 RATE = 8000.0
 
@@ -84,3 +84,13 @@ def test_limit_bandwidth_errors():
     with pytest.raises(ValueError, match=r"^`x` has 63 samples; the anti-alias filter "
                                          r"needs >= 64$"):
         limit_bandwidth(np.zeros((63, 2)), RATE, 500.0)
+
+
+def test_lowest_cutoff_is_the_reach_of_the_resampling():
+    # 2 x cut-off / rate must be at least 1/1000: 2500 Hz reaches down to 1.25 Hz
+    assert lowest_cutoff_hz(2500.0) == 1.25
+    x = np.random.default_rng(0).standard_normal((4096, 1))
+    y, rate = limit_bandwidth(x, 2500.0, lowest_cutoff_hz(2500.0))
+    assert rate == pytest.approx(2.5) and y.shape == (5, 1)
+    with pytest.raises(ValueError, match=r"below 1.25 Hz, the lowest cut-off"):
+        limit_bandwidth(x, 2500.0, 1.2)
