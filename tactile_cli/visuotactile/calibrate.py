@@ -429,6 +429,9 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
                              "presses' image folders first", path=calibration)
         px_per_mm = file_px_per_mm(f, trials[0])
         shape = trials[0].frames().shape
+        from .sensor_unit import frames_unit
+
+        unit, unit_from = frames_unit(f, trials[0])
         progress.start(len(trials), "presses")
         for trial in trials:
             summary, rows, labels = label_press(trial, px_per_mm=px_per_mm,
@@ -443,13 +446,14 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
                              f"{presses[0].trial}: {presses[0].circle.status})",
                              path=calibration)
         config = {"calibration": str(calibration), "flat_per_press": flat_per_press,
-                  "seed": seed, "px_per_mm": px_per_mm}
+                  "seed": seed, "px_per_mm": px_per_mm, "sensor_unit": unit}
         with StoreWriter(out, command=command, config=config, overwrite=overwrite) as writer:
             source = writer.add_source(calibration)
             sensor = writer.add_sensor(
                 PIXEL_STREAM, kind="visuotactile", sample_rate_hz=1.0,
                 channel_names=PIXEL_CHANNELS, channel_units=PIXEL_UNITS,
                 width_px=int(shape[1]), height_px=int(shape[0]), px_per_mm=px_per_mm,
+                sensor_unit=unit, sensor_unit_from=unit_from,
                 description="calibration pixel table (paper 002 sec. II-B): one row per pixel, "
                 "t_s = row index (the rows are not a time series)")
             for trial, summary, rows, labels in tables:
