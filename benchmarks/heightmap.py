@@ -24,6 +24,9 @@ on that size, so it is left out there).
         [--frames 30] [--json]
 
 JSON keys: tactile_ms_per_frame, baseline_ms_per_frame, ratio, height_rmse_mm (320x240),
+replay_fps (issue 35, item 6: a whole replay of the timed 320x240 frames as one 60 fps
+trial through ``monitor_file`` with the height source: frame read, height map, slip
+signal on the 32x24 mesh, monitor; ``replay`` beside it holds the frame read alone),
 plus per-size details and the load average before and after.
 """
 
@@ -202,6 +205,37 @@ def skip_study(model, frames, refs, truths, ppm: float, levels: list[float]) -> 
     return rows
 
 
+def replay_study(work: Path, run: Path, frames: list[np.ndarray], ref: np.ndarray,
+                 ppm: float) -> dict:
+    """A whole replay of ``frames`` as one 60 fps trial of a tactile file: the frame read
+    alone, and ``monitor_file`` with the height source (read, height map, slip signal on
+    the 32x24 mesh, monitor), frames per second of each."""
+    from tactile_cli.store import StoreWriter
+    from tactile_cli.store.trials import TactileFile
+    from tactile_cli.visuotactile.monitor_replay import monitor_file
+
+    path = work / "replay.h5"
+    h, w = frames[0].shape[:2]
+    with StoreWriter(path, command="benchmarks/heightmap.py") as wr:
+        s = wr.add_sensor("digit", kind="visuotactile", sample_rate_hz=60.0, width_px=w,
+                          height_px=h, px_per_mm=ppm)
+        wr.trial("replay").write_frames(sensor=s, images=np.stack(frames),
+                                        t_s=np.arange(len(frames)) / 60.0, reference=ref)
+        wr.commit()
+    n = len(frames)
+    t0 = time.perf_counter()
+    with TactileFile(path) as tf:
+        fr = tf.trial("replay").frames()
+        read = sum(int(img[0, 0, 0]) for _, img in fr)  # every frame decoded
+    read_s = time.perf_counter() - t0
+    monitor_file(path, source="height", model_run=run, n_static=5)  # warm-up
+    t0 = time.perf_counter()
+    monitor_file(path, source="height", model_run=run, n_static=5)
+    replay_s = time.perf_counter() - t0
+    return {"frames": n, "read_fps": round(n / read_s, 1), "replay_fps": round(n / replay_s, 1),
+            "replay_ms_per_frame": round(1e3 * replay_s / n, 2), "checksum": read}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", type=Path, help="ingested digit-press trials file")
@@ -232,6 +266,7 @@ def main() -> None:
         model = NormalModel.from_run(run)
         small = measure(model, frames, refs, truths, ppm, rmse=True)
         skips = skip_study(model, frames, refs, truths, ppm, args.skip_levels)
+        replay = replay_study(work, run, frames, refs[0], ppm)
         big_frames, big_ref, big_truth = factory_frames((480, 640), min(args.frames, 10), 2, ppm)
         big = measure(model, big_frames, [big_ref] * len(big_frames), big_truth, ppm,
                       rmse=False)
@@ -245,6 +280,7 @@ def main() -> None:
         "320x240": small, "640x480": big, "skip_below": skips,
         "load_before": load_before, "load_after": load_after, "cpus": os.cpu_count(),
         "target_ms_per_frame": 5.0, "target_ratio": 10.0,
+        "replay_fps": replay["replay_fps"], "replay": replay, "target_replay_fps": 60.0,
     }
     if args.json:
         print(json.dumps(out, indent=2))
@@ -258,6 +294,9 @@ def main() -> None:
               f"{r['baseline_splu_ms_per_frame']:.1f} ms ({r['ratio_vs_splu']:.2f}x); DST vs "
               f"spsolve max diff {r['max_abs_diff_dst_vs_spsolve_mm']:.1e} mm")
     print(f"height RMSE {out['height_rmse_mm']:.4f} mm on {source}")
+    print(f"replay (read, height map, slip signal, monitor) of {replay['frames']} frames: "
+          f"{replay['replay_fps']:.1f} fps ({replay['replay_ms_per_frame']:.1f} ms a frame); "
+          f"frame read alone {replay['read_fps']:.0f} fps")
     for s in skips:
         print(f"  skip_below {s['skip_below']:g}: {s['ms_per_frame']:.2f} ms/frame, RMSE "
               f"{s['height_rmse_mm']:.4f} mm")

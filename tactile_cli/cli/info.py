@@ -52,9 +52,20 @@ def info_command(
     tree, sensor CSVs with --mapping, image folders) is read without writing anything: its
     streams (type, count, rate and jitter, time span, size, repeated or out-of-order
     stamps), the trials an ingest would make and what it would leave out; other commands
-    need it ingested first."""
+    need it ingested first. A run folder (tactile train's output) is summarised: family,
+    input, heads, data and the sensor unit, frame size and px_per_mm it was calibrated
+    on."""
 
     def body() -> None:
+        from ..learn.sensor_unit import is_run_folder
+
+        if is_run_folder(file):
+            from ..learn.sensor_unit import run_summary
+
+            run = run_summary(file)
+            typer.echo(json.dumps(run.as_dict(), indent=2) if as_json
+                       else "\n".join(run.summary_lines()))
+            return
         options = parse_options(option or [], {"mapping": mapping})
         if fmt != "auto" or options or raw_format(file) is not None:
             _raw(describe_recording(file, format=fmt, options=options), as_json)

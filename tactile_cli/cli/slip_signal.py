@@ -34,8 +34,11 @@ def slip_signal_command(
         "--mesh", help="Tactile mesh COLSxROWS (paper: 320x240 ... 4x3). Default 32x24, the "
         "paper's: 768 units, dense enough for the small hex key of the scene "
         "(benchmarks/slip_mesh.py).", metavar="COLSxROWS")] = "32x24",
-    scale: Annotated[float, typer.Option(
-        "--scale", help="Threshold = scale x mean of the static signals (paper: 2).")] = 2.0,
+    scale: Annotated[str, typer.Option(
+        "--scale", help="Threshold = scale x mean of the static signals (paper: 2), or auto: "
+        "the scale learned from the slip/no_slip trials, chosen by leave-one-object-out CV "
+        "(each trial its own group without an object label) and reported with its "
+        "held-out accuracy and interval.", metavar="SCALE|auto")] = "2",
     n_static: Annotated[int, typer.Option(
         "--n-static", help="Static slip signals averaged for the threshold (paper: 30, one "
         "second at 30 Hz).")] = 30,
@@ -58,15 +61,16 @@ def slip_signal_command(
     (scale x the mean of the first static signals) and, per trial, whether and when slip
     was detected. With slip/no_slip trial labels: detection rate, false alarms (a crossing
     before the labelled slip_onset_s, or on a no_slip trial) and the threshold scale that
-    separates them best."""
+    separates them best. Each trial says whether its static frames were static (a lift is
+    not: the threshold is then one on motion); --scale auto learns the scale instead."""
 
     from ..visuotactile.monitor_replay import parse_mesh
-    from ..visuotactile.slip import slip_signal_file
+    from ..visuotactile.slip import parse_scale, slip_signal_file
 
     def body():
         with RichProgress(enabled=progress) as bar:
             return slip_signal_file(file, source=source, run_dir=model, mesh=parse_mesh(mesh),
-                                    scale=scale, n_static=n_static, trials=trial,
+                                    scale=parse_scale(scale), n_static=n_static, trials=trial,
                                     px_per_mm=px_per_mm, workers=workers, progress=bar,
                                     plot=plot)
 

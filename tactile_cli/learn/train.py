@@ -52,6 +52,7 @@ from .heads import HeadSpec, primary_head
 from .inputs import InputSpec, input_spec
 from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
 from .preprocess import augment_windows
+from .sensor_unit import sensor_unit_record
 from .splits import SplitAssignment, assign_splits, default_by, split_from_mapping
 
 
@@ -386,6 +387,7 @@ def train(
                   "n_trials": sum(1 for t in prep.trials if t.file == str(p))} for p in paths],
         "heads": [h.as_dict() for h in prep.heads],
         "input": prep.input.as_dict(),
+        "sensor_unit": sensor_unit_record(paths, d.stream),
         "recording_order": recording_record(
             [t for t, s in zip(prep.trials, prep.assignment.splits, strict=True)
              if s in ("train", "val")], prep.heads, split_mode=d.split.mode,

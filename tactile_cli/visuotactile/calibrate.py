@@ -10,6 +10,18 @@ For each calibration frame (a ball bearing of known radius pressed into the gel)
    pixels: algebraic (Kasa) start, then a geometric least-squares fit with a soft-L1 loss,
    so stray boundary pixels (noise, a shadow) pull little. The paper uses the Hough
    transform and manual adjustment; this fit needs neither image library nor a person.
+   On a real gel the region is too large: the gel around the contact deforms too (a halo
+   whose colour change fades over tens of pixels), markers move, and a reference taken at
+   another time or uneven LEDs shift the flat level. So the circle is refined (``robust``,
+   the default) on the rim itself: in each of 32 angular sectors the radial profile of the
+   median-filtered difference (5 px: marker dots out, steps kept) rises with the sphere's
+   slope to a peak and falls fastest at the rim; a circle fitted (soft-L1) to those rim
+   points gives centre and radius. When the rim points scatter about it by more than
+   :data:`UNCERTAIN_EDGE_PX` (or :data:`UNCERTAIN_EDGE_SHARE` of the radius; median RMS),
+   or too few sectors show a rim, the press gets an ``uncertain circle`` status: reported
+   by ``tactile normal-labels`` and left out of the table, never silently used. Measured
+   against hand-annotated circles of real GelSight presses and on simulated ones by
+   ``benchmarks/press_circles.py``.
 2. **Normals** (eqs. 5-8) inside the circle from the sphere: with ``d_PV`` the distance of
    pixel P from the centre in mm (``pixels / px_per_mm``) and R the ball radius,
    ``a = atan2(y - yc, x - xc)``, ``b = arccos(d_PV / R)``,
@@ -84,13 +96,18 @@ def colour_difference(frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 
 def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, k_mad: float = 8.0,
-                        smooth_px: float = 1.5, min_radius_px: float = 3.0) -> CircleFit:
+                        smooth_px: float = 1.5, min_radius_px: float = 3.0,
+                        robust: bool = True) -> CircleFit:
     """The ball's contact circle in one frame (method: module docstring, step 1).
 
     frame, reference: (H, W, 3) uint8. k_mad: threshold in robust standard deviations of
     the colour-difference magnitude above its median. smooth_px: Gaussian smoothing (px)
-    of the magnitude before thresholding. Never raises on a bad frame: a frame without a
-    usable contact gets a status saying why and NaN geometry.
+    of the magnitude before thresholding. robust: refine on the rim per sector (module
+    docstring; False: the region's boundary only, as before issue 35). Never raises on a
+    bad frame: a frame without a usable contact gets a status saying why and NaN geometry;
+    an uncertain circle keeps its geometry with an ``uncertain circle`` status.
+    n_boundary / residual_px: with ``robust``, the rim points and their median RMS
+    distance to the circle.
     """
     from scipy import ndimage
     from scipy.optimize import least_squares
@@ -131,12 +148,99 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, k_mad: floa
     fit = least_squares(residuals, np.array([a, b, r0]), loss="soft_l1", f_scale=1.0)
     xc, yc, radius = (float(v) for v in fit.x)
     rms = float(np.sqrt(np.mean(residuals(fit.x) ** 2)))
+    n_used = len(xs)
+    if robust:
+        # the region takes in the deformation halo around a real contact: the rim is
+        # where the colour change falls fastest, found per sector and fitted again
+        edge = _sector_edges(diff, xc, yc, radius)
+        if edge is None:
+            return failed("uncertain circle: too few sectors show the contact's edge", len(xs))
+        ex, ey = edge
+
+        def edge_residuals(p: np.ndarray) -> np.ndarray:
+            return np.hypot(ex - p[0], ey - p[1]) - p[2]
+
+        refit = least_squares(edge_residuals, np.array([xc, yc, radius]), loss="soft_l1",
+                              f_scale=1.0)
+        xc, yc, radius = (float(v) for v in refit.x)
+        rms = float(np.sqrt(np.median(edge_residuals(refit.x) ** 2)))
+        n_used = len(ex)
+        limit = max(UNCERTAIN_EDGE_PX, UNCERTAIN_EDGE_SHARE * radius)
+        if not rms <= limit:
+            return CircleFit(xc, yc, radius, n_used, rms, threshold,
+                             f"uncertain circle: its edge points scatter {rms:.1f} px (median "
+                             f"RMS) about it, more than {limit:.1f} px")
     # the smoothing spreads the rim's colour step outwards, so the thresholded disk is too
     # large by about 2 * smooth_px; the rim is where the unsmoothed step is half-way
     radius = _half_step_radius(diff, xc, yc, radius, reach_px=3 * smooth_px + 3)
     if not (np.isfinite(radius) and radius >= min_radius_px):
-        return failed(f"fitted radius {radius:.1f} px is below {min_radius_px} px", len(xs))
-    return CircleFit(xc, yc, radius, len(xs), rms, threshold)
+        return failed(f"fitted radius {radius:.1f} px is below {min_radius_px} px", n_used)
+    return CircleFit(xc, yc, radius, n_used, rms, threshold)
+
+
+#: the median RMS (px) of the edge points about the circle above which a circle is
+#: uncertain, or this share of its radius when larger
+UNCERTAIN_EDGE_PX = 2.0
+UNCERTAIN_EDGE_SHARE = 0.08
+#: sectors that must show an edge for a circle
+MIN_EDGE_SECTORS = 12
+
+
+def _sector_edges(diff: np.ndarray, xc: float, yc: float, r0: float, *, n_sectors: int = 32,
+                  bin_px: float = 0.5) -> tuple[np.ndarray, np.ndarray] | None:
+    """The contact's rim per angular sector: on the colour-difference magnitude ``diff``
+    (H, W) median-filtered over 5 px (marker dots and noise out, steps kept), the radial
+    profile around (``xc``, ``yc``) out to ``r0`` + 6 px (bins of ``bin_px``, smoothed
+    over 1 px); from its peak beyond ``r0`` / 4 (the sphere's slope, steepest at the rim)
+    the radius where it falls fastest. Returns the (x, y) rim points of the sectors that
+    have one, None when fewer than :data:`MIN_EDGE_SECTORS` do."""
+    from scipy import ndimage
+
+    h, w = diff.shape
+    hi = r0 + 6.0
+    y0, y1 = max(0, int(yc - hi) - 3), min(h, int(yc + hi) + 4)
+    x0, x1 = max(0, int(xc - hi) - 3), min(w, int(xc + hi) + 4)
+    if y1 - y0 < 3 or x1 - x0 < 3:
+        return None
+    mag = ndimage.median_filter(diff[y0:y1, x0:x1], size=5)
+    ys, xs = np.mgrid[y0:y1, x0:x1]
+    r = np.hypot(xs - xc, ys - yc)
+    near = r < hi
+    r, mag = r[near], mag[near]
+    sector = ((np.arctan2(ys[near] - yc, xs[near] - xc) + np.pi) / (2 * np.pi)
+              * n_sectors).astype(int) % n_sectors
+    n_bins = int(np.ceil(hi / bin_px))
+    rbin = np.minimum((r / bin_px).astype(int), n_bins - 1)
+    sums = np.zeros((n_sectors, n_bins))
+    counts = np.zeros((n_sectors, n_bins))
+    np.add.at(sums, (sector, rbin), mag)
+    np.add.at(counts, (sector, rbin), 1)
+    centres = (np.arange(n_bins) + 0.5) * bin_px
+    px, py = [], []
+    for k in range(n_sectors):
+        ok = counts[k] > 0
+        if ok.sum() < n_bins // 2:
+            continue
+        prof = np.interp(centres, centres[ok], sums[k][ok] / counts[k][ok])
+        prof = ndimage.gaussian_filter1d(prof, 1.0 / bin_px)
+        lo = int(0.25 * r0 / bin_px)
+        top = min(n_bins - 2, int((r0 + 2.0) / bin_px))
+        if top <= lo:
+            continue
+        peak = lo + int(np.argmax(prof[lo:top + 1]))
+        slope = np.diff(prof)
+        if peak >= n_bins - 2:
+            continue
+        j = peak + int(np.argmin(slope[peak:]))
+        if not slope[j] < 0:
+            continue
+        radius = (j + 1) * bin_px  # between the centres of bins j and j + 1
+        theta = (k + 0.5) / n_sectors * 2 * np.pi - np.pi
+        px.append(xc + radius * np.cos(theta))
+        py.append(yc + radius * np.sin(theta))
+    if len(px) < MIN_EDGE_SECTORS:
+        return None
+    return np.asarray(px), np.asarray(py)
 
 
 def _half_step_radius(diff: np.ndarray, xc: float, yc: float, r0: float, *,
@@ -429,6 +533,9 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
                              "presses' image folders first", path=calibration)
         px_per_mm = file_px_per_mm(f, trials[0])
         shape = trials[0].frames().shape
+        from .sensor_unit import frames_unit
+
+        unit, unit_from = frames_unit(f, trials[0])
         progress.start(len(trials), "presses")
         for trial in trials:
             summary, rows, labels = label_press(trial, px_per_mm=px_per_mm,
@@ -443,13 +550,14 @@ def write_normal_labels(calibration: str | Path, out: str | Path, *, flat_per_pr
                              f"{presses[0].trial}: {presses[0].circle.status})",
                              path=calibration)
         config = {"calibration": str(calibration), "flat_per_press": flat_per_press,
-                  "seed": seed, "px_per_mm": px_per_mm}
+                  "seed": seed, "px_per_mm": px_per_mm, "sensor_unit": unit}
         with StoreWriter(out, command=command, config=config, overwrite=overwrite) as writer:
             source = writer.add_source(calibration)
             sensor = writer.add_sensor(
                 PIXEL_STREAM, kind="visuotactile", sample_rate_hz=1.0,
                 channel_names=PIXEL_CHANNELS, channel_units=PIXEL_UNITS,
                 width_px=int(shape[1]), height_px=int(shape[0]), px_per_mm=px_per_mm,
+                sensor_unit=unit, sensor_unit_from=unit_from,
                 description="calibration pixel table (paper 002 sec. II-B): one row per pixel, "
                 "t_s = row index (the rows are not a time series)")
             for trial, summary, rows, labels in tables:
@@ -605,7 +713,8 @@ def normal_rmse(predict: Callable[[np.ndarray, np.ndarray], np.ndarray],
         truth="scene" if use_scene else "fit")
 
 
-__all__ = ["NORMAL_LABELS", "PIXEL_CHANNELS", "PIXEL_STREAM", "CircleFit", "NormalLabelsResult",
+__all__ = ["NORMAL_LABELS", "PIXEL_CHANNELS", "PIXEL_STREAM", "UNCERTAIN_EDGE_PX",
+           "UNCERTAIN_EDGE_SHARE", "CircleFit", "NormalLabelsResult",
            "NormalRmse", "PressLabels", "colour_difference", "find_contact_circle",
            "image_rmse", "label_press", "normal_rmse", "pixel_inputs", "sphere_normals",
            "write_normal_labels"]

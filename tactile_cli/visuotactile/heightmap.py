@@ -209,15 +209,19 @@ class HeightmapResult:
     px_per_mm: float
     run_dir: str
     plot: Path | None = None
+    #: one line each: frames of another unit or scale than the model's calibration
+    warnings: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return {"out": str(self.out), "run": self.run_dir, "px_per_mm": self.px_per_mm,
+                "warnings": list(self.warnings),
                 "rmse_mm": self.rmse_mm, "rmse_contact_mm": self.rmse_contact_mm,
                 "ms_per_frame": self.ms_per_frame,
                 "trials": [t.__dict__ for t in self.trials]}
 
     def summary_lines(self) -> list[str]:
-        lines = [f"wrote {self.out}: {sum(t.n_frames for t in self.trials)} height maps of "
+        lines = [f"warning: {w}" for w in self.warnings]
+        lines += [f"wrote {self.out}: {sum(t.n_frames for t in self.trials)} height maps of "
                  f"{len(self.trials)} trial(s), {self.ms_per_frame:.1f} ms per frame (reading "
                  f"and writing included), px_per_mm {self.px_per_mm:g}"]
         if self.rmse_mm is not None:
@@ -292,7 +296,9 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
     run_path = Path(run_dir)
     config = {"run": str(run_dir), "px_per_mm": px_per_mm, "skip_below": skip_below,
               "truth": None if truth_dir is None else str(truth_dir),
-              "nz_floor": NZ_FLOOR, "input_kind": model.input_kind}
+              "nz_floor": NZ_FLOOR, "input_kind": model.input_kind,
+              "sensor_unit": None if model.calibration is None
+              else model.calibration.as_dict()}
     summaries: list[TrialHeights] = []
     peaks: dict[str, tuple[int, np.ndarray]] = {}
     sq_all = sq_contact = 0.0
@@ -304,6 +310,7 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
         if trials is not None:
             chosen = tf.trials(list(trials))
         scale = frames_px_per_mm(tf, chosen[0], px_per_mm)
+        warnings = model.check_frames(tf, chosen[0], scale)
         mapper = HeightMapper(model, scale, skip_below=skip_below, workers=threads)
         with StoreWriter(out, command=command, config=config, overwrite=overwrite) as w:
             source = w.add_source(path)
@@ -370,7 +377,7 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
     return HeightmapResult(Path(out), summaries, _rmse(sq_all, n_all),
                            _rmse(sq_contact, n_contact),
                            1e3 * elapsed / max(1, n_frames), scale, str(run_dir),
-                           None if plot is None else Path(plot))
+                           None if plot is None else Path(plot), warnings)
 
 
 def read_height_maps(trial: Trial) -> tuple[np.ndarray, np.ndarray, float]:

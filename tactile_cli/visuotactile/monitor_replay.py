@@ -97,6 +97,8 @@ class MonitorFileResult:
     motion_s: float
     trials: list[TrialMonitor]
     plot: Path | None = None
+    #: one line each: frames of another unit or scale than the normal model's calibration
+    warnings: list[str] = field(default_factory=list)
 
     def totals(self) -> dict[str, Any]:
         scored = [t.score for t in self.trials if t.score is not None]
@@ -116,11 +118,12 @@ class MonitorFileResult:
     def as_dict(self) -> dict[str, Any]:
         return {"file": self.file, "source": self.source, "mesh": list(self.mesh),
                 "hold_s": self.hold_s, "motion_s": self.motion_s, "totals": self.totals(),
+                "warnings": list(self.warnings),
                 "trials": [t.as_dict() for t in self.trials]}
 
     def summary_lines(self) -> list[str]:
         """Per trial its threshold, mode changes, grip commands and score; the totals."""
-        lines = []
+        lines = [f"warning: {w}" for w in self.warnings]
         for t in self.trials:
             lines.append(f"{t.trial}: threshold {t.threshold:.6g} (monitor from frame "
                          f"{t.start_frame}; gripper motion from {t.motion_from})")
@@ -284,6 +287,16 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
         if not chosen:
             raise InputError("no trial has image frames or height maps; ingest image-sequence "
                              "folders (`tactile ingest OUT/trials`)", path=path)
+        warnings: list[str] = []
+        if maps.model is not None:  # before any work: frames the model was calibrated on
+            from .heightmap import frames_px_per_mm
+
+            for trial in chosen:
+                if trial.has_frames and not trial.has_signal(STREAM):
+                    for w in maps.model.check_frames(tf, trial,
+                                                     frames_px_per_mm(tf, trial, None)):
+                        if w not in warnings:
+                            warnings.append(w)
         progress.start(None, "frames")
         for trial in chosen:
             t_s, signal = trial_signal(tf, trial, maps, mesh, progress=progress)
@@ -307,7 +320,7 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
                                         signal, rep.mode, rep.moving))
         progress.finish()
     return MonitorFileResult(str(path), source, (int(mesh[0]), int(mesh[1])), float(hold_s),
-                             float(motion_s), results)
+                             float(motion_s), results, warnings=warnings)
 
 
 #: ``ingest_frames(inputs, out, options)``: ingest the image-sequence folder(s) ``inputs``

@@ -34,6 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..store.trials import TactileFile, Trial
+from .sensor_unit import SensorCalibration, check_frames
 
 #: channel lists the model may be trained on (in any order), by input kind
 _KIND_CHANNELS = {"difference": {"x", "y", "dR", "dG", "dB"},
@@ -72,6 +74,8 @@ class NormalModel:
     w_out: np.ndarray
     b_out: np.ndarray
     run_dir: Path | None = None
+    #: the unit, frame size and scale the run was calibrated on (None: not recorded)
+    calibration: SensorCalibration | None = None
     _input_cache: dict[tuple[int, int], np.ndarray] = field(default_factory=dict, repr=False)
     _aug: tuple[np.ndarray, list[np.ndarray], np.ndarray] | None = field(default=None,
                                                                           repr=False)
@@ -82,8 +86,21 @@ class NormalModel:
         """Read a run of ``tactile train configs/train_mlp_normals.yaml``; one InputError
         naming the run folder if it is not such a run."""
         from ..learn.dense_weights import dense_arrays
+        from ..learn.runs import RUN_JSON, read_run_info
 
-        return cls.from_arrays(dense_arrays(run_dir))
+        model = cls.from_arrays(dense_arrays(run_dir))
+        record = read_run_info(run_dir).get("sensor_unit")
+        if record is not None:
+            model.calibration = SensorCalibration.from_dict(record,
+                                                            path=Path(run_dir) / RUN_JSON)
+        return model
+
+    def check_frames(self, tf: TactileFile, trial: Trial,
+                     px_per_mm: float | None) -> list[str]:
+        """:func:`.sensor_unit.check_frames` against this model's calibration: InputError
+        on another frame size, warnings (returned) on another unit or scale."""
+        return check_frames(self.calibration, tf, trial, run=self.run_dir,
+                            px_per_mm=px_per_mm)
 
     @classmethod
     def from_arrays(cls, arrays: object) -> NormalModel:

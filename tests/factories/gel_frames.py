@@ -87,14 +87,17 @@ def make_pixel_table(path: Path, *, n_presses: int = 6, shape: tuple[int, int] =
                      seed: int = 0, noise_std: float = 1.0) -> Path:
     """A pixel table like the scene's calibration step writes: one trial per press, stream
     ``pixels`` (channels x, y, dR, dG, dB, R, G, B; one sample per pixel) with numeric
-    per-sample labels nx, ny, nz (the true unit normal)."""
+    per-sample labels nx, ny, nz (the true unit normal); its sensor records the unit
+    (``digit``, the sensor of :func:`make_frames_file`), frame size and ``px_per_mm`` as
+    ``tactile normal-labels`` does."""
     rng = np.random.default_rng(seed)
     h, w = shape
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     reference = shade(np.zeros(shape), noise_std=noise_std, rng=rng)
     with StoreWriter(path, command="tests.factories.gel_frames") as wr:
         s = wr.add_sensor("pixels", kind="visuotactile", sample_rate_hz=1000.0,
-                          width_px=w, height_px=h,
+                          width_px=w, height_px=h, px_per_mm=PX_PER_MM, sensor_unit="digit",
+                          sensor_unit_from="sensor name",
                           channel_names=["x", "y", "dR", "dG", "dB", "R", "G", "B"],
                           channel_units=["px", "px", "", "", "", "", "", ""])
         for i, cap in enumerate(random_caps(rng, n_presses, shape)):

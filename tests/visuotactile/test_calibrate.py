@@ -101,6 +101,10 @@ def test_pixel_table(files: dict) -> None:
         trial = f.trial("ball_03")
         sig = trial.signal("pixels")
         assert sig.channel_names == PIXEL_CHANNELS
+        # the unit the presses came from, for the run trained on it (issue 35, item 4)
+        assert sig.sensor.attrs["sensor_unit"] == "visuotactile"  # the ingest's sensor name
+        assert sig.sensor.attrs["sensor_unit_from"] == "sensor name"
+        assert (sig.sensor.width_px, sig.sensor.height_px) == (320, 240)
         labels = trial.sample_labels("pixels")
         assert set(labels) == {"nx", "ny", "nz"}
         data = sig.data
