@@ -9,6 +9,7 @@ boundaries are dashed lines with their uncertainty as a band.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -19,7 +20,9 @@ import numpy as np  # noqa: E402
 from ..store.atomic import save_figure  # noqa: E402
 from ..store.writer import safe_name  # noqa: E402
 from ..vocabulary import ACTIONS, action_index  # noqa: E402
-from .recording import TrialAccumulation  # noqa: E402
+
+if TYPE_CHECKING:  # the recording module imports this figure
+    from .recording import TrialAccumulation
 
 REGION_COLOURS = {"approach": "#e8e8e8", "press": "#cfe8ff", "slip": "#ffe0c2",
                   "release": "#d8f5d0"}

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .pipeline import FEATURES, PresetFeatures
+if TYPE_CHECKING:  # the pipeline imports these figures
+    from .pipeline import PresetFeatures
 
+#: the rows of the feature figure: pipeline.FEATURES, with their axis labels
 _LABELS = {"gamma": "power ratio Γ", "g2_single": "single-finger G²",
            "g2_multi": "multi-finger G²"}
+FEATURES = tuple(_LABELS)
 
 
 def plot_feature_spectra(features: dict[str, PresetFeatures], out: str | Path) -> Path:

@@ -6,12 +6,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..store.atomic import save_figure
 from .model import ModelSpectra
-from .pipeline import DetectionReport, TrialDetection
+
+if TYPE_CHECKING:  # the pipeline imports these figures
+    from .pipeline import DetectionReport, TrialDetection
 
 
 def figure_path(path: str | Path) -> Path:
