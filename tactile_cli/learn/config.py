@@ -27,7 +27,8 @@ Absurd sizes are refused before any work, with their key and line. Every number 
 finite, and the sizes have generous upper bounds, far above any real use: ``data.window``,
 ``data.stride``, ``optim.batch_size`` and the spectrogram's ``n_fft``/``hop`` at most
 10^7; a layer width (``hidden``, ``channels``, ``head_hidden``) at most 10^5; ``layers`` and
-list lengths at most 1000; ``optim.threads`` at most 1024; ``optim.epochs`` at most 10^6.
+list lengths at most 1000 (``data.channels`` at most 3 x 4096 x 4096, the pixel values of
+the largest image-sequence input); ``optim.threads`` at most 1024; ``optim.epochs`` at most 10^6.
 Then the memory a training step needs is estimated from the config alone (the weights with
 their gradients and Adam state, 16 bytes per parameter; the activations of one batch; the
 batch itself) and a config that needs more than this machine's physical memory is refused,
@@ -78,6 +79,8 @@ FRAMES_STREAM = "frames"
 _MAX_SAMPLES = 10_000_000
 _MAX_WIDTH = 100_000
 _MAX_LIST = 1000
+#: ``data.channels``: the pixel values of the largest frame input (3 planes of 4096 x 4096).
+_MAX_CHANNELS = 3 * 4096 * 4096
 _MAX_SEED = 2**63 - 1
 _Width = Annotated[int, Field(ge=1, le=_MAX_WIDTH)]
 
@@ -219,7 +222,7 @@ class DataConfig(_Model):
     stream: str = Field(min_length=1)
     """Signal stream of every trial. ``event_counts`` is also computed on the fly from a
     trial's events (bins of ``bin_s``) when the trial has no such stream."""
-    channels: list[str] = Field(min_length=1, max_length=_MAX_LIST)
+    channels: list[str] = Field(min_length=1, max_length=_MAX_CHANNELS)
     """Channel names of the stream's sensor, in the order the model sees them. A name with
     ``*``, ``?`` or ``[`` is a glob pattern (``ele*``, ``txl?_z``) matched against the
     sensor's channel names in their stored order; ``tactile train`` writes the matched names

@@ -91,6 +91,11 @@ def test_config_round_trip_and_refusals(tmp_path):
     path = tmp_path / "c.yaml"
     path.write_text(cfg.as_yaml())
     assert load_config(path) == cfg
+    # a run's resolved config lists every pixel value: 3 x 24 x 32 = 2304 channel names
+    big = _raw(frames={"width": 32, "height": 24, "colour": True})
+    big["data"]["channels"] = frame_channel_names(FramesConfig(width=32, height=24,
+                                                               colour=True))
+    assert len(parse_config(big).data.channels) == 2304
     assert parse_config({**_raw(), "data": {**_raw()["data"], "frames": None}}).data.frames \
         == FramesConfig()  # stream frames: the default input
     bad = _raw()
