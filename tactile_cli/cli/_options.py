@@ -114,8 +114,13 @@ SeedOption = Annotated[int, typer.Option(min=0, help="Random seed; fixes every o
 OverwriteOption = Annotated[bool, typer.Option(help="Replace an existing output (only once "
                                                "the new one is complete).")]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON.")]
+#: ``--device auto|cpu|cuda`` of train, evaluate and sweep (``tactile_cli.learn.device``).
+DeviceOption = Annotated[str, typer.Option(
+    "--device", metavar="auto|cpu|cuda",
+    help="Where networks train and predict: auto (a CUDA GPU when torch sees one, else the "
+    "CPU), cpu or cuda. Recorded in the run; classic families always use the CPU.")]
 
 
-__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "JsonOption",
+__all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "DeviceOption", "JsonOption",
            "NoArgsIsHelpError", "OverwriteOption", "SceneConfigOption", "SeedOption",
            "data_files", "finite_float_options", "runs_and_files", "usage_error"]

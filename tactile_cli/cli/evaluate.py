@@ -11,7 +11,7 @@ import typer
 from ..errors import InputError
 from ._batch import BATCH_FLAGS, FileBatchPrinter, SchedulerOption, WorkersOption, finish_batch
 from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
-from ._options import data_files
+from ._options import DeviceOption, data_files
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -25,6 +25,7 @@ FLAGS: dict[str, Flag] = {
     "perturb": "--perturb",
     "threads": "--threads",
     "shift_threshold_sd": "--shift-threshold",
+    "device": "--device",
     **BATCH_FLAGS,
 }
 
@@ -58,6 +59,7 @@ def evaluate_command(
     overwrite: Annotated[
         bool, typer.Option(help="Replace an existing RUN/eval/<name> folder.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
+    device: DeviceOption = "auto",
     each: Annotated[
         bool, typer.Option("--each", help="Evaluate on each --data file apart, into "
                            "RUN/eval/<file stem>, one task per file on Dask (--workers, "
@@ -113,7 +115,7 @@ def evaluate_command(
         result = evaluate_run(run, files, split=split, name=name,  # type: ignore[arg-type]
                               latency=latency, threads=threads, overwrite=overwrite,
                               exported=exported, perturb=kinds, threshold=threshold,
-                              shift_threshold_sd=shift_threshold)
+                              shift_threshold_sd=shift_threshold, device=device)
         if as_json:
             echo_json(result.as_dict())
         else:

@@ -10,6 +10,7 @@ import typer
 
 from ._batch import BATCH_FLAGS, scheduler_option, workers_option
 from ._errors import EXIT_BAD_INPUT, Flag, run_guarded
+from ._options import DeviceOption
 from ._output import Progress, echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -17,6 +18,7 @@ FLAGS: dict[str, Flag] = {
     "train_data": "--data",
     "eval_data": "--eval-data",
     "out": "--out",
+    "device": "--device",
     **BATCH_FLAGS,
 }
 SweepScheduler = scheduler_option("")
@@ -49,6 +51,7 @@ def sweep_command(
                                             "folder that holds no sweep.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print sweep_results as JSON.")
                        ] = False,
+    device: DeviceOption = "auto",
     progress: Annotated[
         bool | None,
         typer.Option("--progress/--no-progress",
@@ -68,6 +71,7 @@ def sweep_command(
         with bar.running():
             result = run_sweep(config, out, train_data=data, eval_data=eval_data,
                                scheduler=scheduler, workers=workers, overwrite=overwrite,
+                               device=device,
                                on_line=bar.say, on_progress=lambda c: bar.update(
                                    total=c.total, completed=c.done + c.failed,
                                    description=f"sweep: {c.text()}"))

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
-from ._options import data_files
+from ._options import DeviceOption, data_files
 from ._output import Progress, echo_json, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
@@ -20,6 +20,7 @@ FLAGS: dict[str, Flag] = {
     "split_from": "--split-from",
     "seed": "--seed",
     "epochs": "--epochs",
+    "device": "--device",
 }
 
 
@@ -63,6 +64,7 @@ def train_command(
     ] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing run folder.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    device: DeviceOption = "auto",
     progress: Annotated[
         bool | None,
         typer.Option("--progress/--no-progress",
@@ -70,7 +72,8 @@ def train_command(
                      "one line per epoch on stderr).", show_default=False),
     ] = None,
 ) -> None:
-    """Train a model of the registry (lstm, cnn1d, cnn2d_spectrogram, fnn, mlp, cnn2d_layout;
+    """Train a model of the registry (lstm, cnn1d, cnn2d_spectrogram, fnn, mlp, cnn2d_layout,
+    cnn2d_frames on image sequences;
     or a classic one: logistic, random_forest, hist_gb, svm, stored as ONNX) on windows of
     tactile HDF5 files and write a run folder: weights, resolved config, normalisation,
     history and curves, versions and data provenance. Deterministic with a seed on CPU."""
@@ -86,7 +89,7 @@ def train_command(
                 on_start=lambda _, cfg: bar.update(description="training",
                                                    total=cfg.optim.epochs),
                 on_epoch=lambda r: bar.step(epoch_line(r), completed=r.epoch),
-                on_line=bar.say)
+                on_line=bar.say, device=device)
         warn(result.warnings)
         if as_json:
             echo_json(result.as_dict())

@@ -358,7 +358,7 @@ def train_classic(
                      "monitor": "one fit", "best_val_loss": record.val_loss,
                      "best_val_accuracy": record.val_accuracy, "train_time_s": train_time,
                      "threads": config.optim.threads, "deterministic": True,
-                     "notes": notes},
+                     "device": "cpu", "notes": notes},
     }
     rows = [record.as_dict()]
 

@@ -27,7 +27,8 @@ Absurd sizes are refused before any work, with their key and line. Every number 
 finite, and the sizes have generous upper bounds, far above any real use: ``data.window``,
 ``data.stride``, ``optim.batch_size`` and the spectrogram's ``n_fft``/``hop`` at most
 10^7; a layer width (``hidden``, ``channels``, ``head_hidden``) at most 10^5; ``layers`` and
-list lengths at most 1000; ``optim.threads`` at most 1024; ``optim.epochs`` at most 10^6.
+list lengths at most 1000 (``data.channels`` at most 3 x 4096 x 4096, the pixel values of
+the largest image-sequence input); ``optim.threads`` at most 1024; ``optim.epochs`` at most 10^6.
 Then the memory a training step needs is estimated from the config alone (the weights with
 their gradients and Adam state, 16 bytes per parameter; the activations of one batch; the
 batch itself) and a config that needs more than this machine's physical memory is refused,
@@ -67,7 +68,10 @@ FEATURE_NAMES: tuple[str, ...] = SUMMARY_FEATURES + LEVEL_FREE_FEATURES
 CLASSIC_FAMILIES: tuple[str, ...] = ("logistic", "random_forest", "hist_gb", "svm")
 #: Model families of the registry (``model.family``): the networks, then the classic ones.
 FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp",
-                             "cnn2d_layout", *CLASSIC_FAMILIES)
+                             "cnn2d_layout", "cnn2d_frames", *CLASSIC_FAMILIES)
+#: The stream name that reads a trial's image frames (``/trials/{trial}/frames``) as an
+#: image-sequence input (issue 35; :mod:`.frames`).
+FRAMES_STREAM = "frames"
 
 
 #: Upper bounds of sizes (see the module docstring): far above any real use, low enough
@@ -75,6 +79,8 @@ FAMILIES: tuple[str, ...] = ("lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp",
 _MAX_SAMPLES = 10_000_000
 _MAX_WIDTH = 100_000
 _MAX_LIST = 1000
+#: ``data.channels``: the pixel values of the largest frame input (3 planes of 4096 x 4096).
+_MAX_CHANNELS = 3 * 4096 * 4096
 _MAX_SEED = 2**63 - 1
 _Width = Annotated[int, Field(ge=1, le=_MAX_WIDTH)]
 
@@ -180,13 +186,43 @@ class AugmentConfig(_Model):
                                    self.channel_dropout))
 
 
+class FramesConfig(_Model):
+    """An image-sequence input (``data.stream: frames``; :mod:`.frames`): every frame of a
+    trial as its difference from a reference frame, area-averaged down to ``width`` x
+    ``height`` pixels, grey or in colour. Each pixel of each plane is one channel of the
+    window (plane-major: all of plane 0's rows, then plane 1's), named
+    ``<plane>_r<row>_c<col>`` (planes ``grey``, or ``r``, ``g``, ``b``), in levels of the
+    8-bit camera (a difference: -255 to 255)."""
+
+    width: int = Field(default=32, ge=1, le=4096)
+    """Pixels across after downsampling (at most the camera's width)."""
+    height: int = Field(default=24, ge=1, le=4096)
+    """Pixels down after downsampling (at most the camera's height)."""
+    colour: bool = False
+    """Keep the red, green and blue planes (3 values a pixel); else one grey plane (the
+    ITU-R BT.601 luma of the difference)."""
+    reference: Literal["stored", "first"] = "stored"
+    """The frame subtracted: the trial's stored no-contact frame (``frames/reference``;
+    ``tactile ingest --reference first`` stores each folder's first frame), or the trial's
+    own first frame."""
+
+    @property
+    def planes(self) -> tuple[str, ...]:
+        return ("r", "g", "b") if self.colour else ("grey",)
+
+    @property
+    def n_values(self) -> int:
+        """Values per frame: planes x height x width."""
+        return len(self.planes) * self.height * self.width
+
+
 class DataConfig(_Model):
     """Which stream and channels, how they are cut into windows, and what to predict."""
 
     stream: str = Field(min_length=1)
     """Signal stream of every trial. ``event_counts`` is also computed on the fly from a
     trial's events (bins of ``bin_s``) when the trial has no such stream."""
-    channels: list[str] = Field(min_length=1, max_length=_MAX_LIST)
+    channels: list[str] = Field(min_length=1, max_length=_MAX_CHANNELS)
     """Channel names of the stream's sensor, in the order the model sees them. A name with
     ``*``, ``?`` or ``[`` is a glob pattern (``ele*``, ``txl?_z``) matched against the
     sensor's channel names in their stored order; ``tactile train`` writes the matched names
@@ -248,6 +284,17 @@ class DataConfig(_Model):
     """Per-trial baseline removal before ``transform`` and normalisation (default none)."""
     augment: AugmentConfig = AugmentConfig()
     """Augmentation of the training windows (default none); evaluation never augments."""
+    frames: FramesConfig | None = None
+    """With ``stream: frames``: the image-sequence input (default :class:`FramesConfig`);
+    ``channels: ["*"]`` then selects every pixel value of it."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_frames(cls, value: Any) -> Any:
+        if isinstance(value, dict) and value.get("stream") == FRAMES_STREAM \
+                and value.get("frames") is None:
+            return {**value, "frames": {}}
+        return value
 
     @model_validator(mode="after")
     def _check(self) -> DataConfig:
@@ -258,6 +305,9 @@ class DataConfig(_Model):
             raise ValueError(f"`targets` names repeat: {names}")
         if abs(round(self.bin_s * 1e6) - self.bin_s * 1e6) > 1e-6 * self.bin_s * 1e6:
             raise ValueError(f"`bin_s` (={self.bin_s}) must be a whole number of microseconds")
+        if self.frames is not None and self.stream != FRAMES_STREAM:
+            raise ValueError(f"`frames` goes with `stream: {FRAMES_STREAM}` (the image "
+                             f"frames of each trial); this config reads stream {self.stream!r}")
         if self.label_rule == "majority" and self.label_delay:
             raise ValueError("`label_delay` applies to `label_rule: last` only")
         if self.label_delay >= self.window:
@@ -363,6 +413,33 @@ class Cnn2dLayoutConfig(_Family):
         return self
 
 
+class Cnn2dFramesConfig(_Family):
+    """Image sequences (``data.stream: frames``): each frame of the window encoded by 2-D
+    convolutions into ``embed`` features, then aggregated over time by an LSTM (its last
+    hidden state: a causal decision at the window's last frame) or by temporal convolutions
+    averaged over the window (:mod:`.frame_cnn`; the CNN-LSTM of slip detection on GelSight
+    lifts, Li et al., ICRA 2018)."""
+
+    family: Literal["cnn2d_frames"]
+    channels: list[_Width] = Field(default=[8, 16], min_length=1, max_length=_MAX_LIST)
+    """Output channels of each 2-D convolution of the frame encoder (each followed by ReLU
+    and a 2 x 2 max-pool while the image is at least 2 x 2)."""
+    kernel: int = Field(default=3, ge=1, le=_MAX_WIDTH)
+    """Pixels; odd, so that 'same' padding centres it."""
+    embed: int = Field(default=32, ge=1, le=_MAX_WIDTH)
+    """Features per frame (a dense layer with ReLU on the flattened convolution output)."""
+    temporal: Literal["lstm", "conv"] = "lstm"
+    """How frames are aggregated: ``lstm`` (last hidden state) or ``conv`` (1-D 'same'
+    convolutions over the frames with ReLU, then the mean over the window)."""
+    hidden: int = Field(default=32, ge=1, le=_MAX_WIDTH)
+    """LSTM hidden size, or output channels of each temporal convolution."""
+    temporal_layers: int = Field(default=1, ge=1, le=_MAX_LIST)
+    temporal_kernel: int = Field(default=3, ge=1, le=_MAX_SAMPLES)
+    """``conv`` only: frames per temporal kernel; odd."""
+
+    _odd = field_validator("kernel", "temporal_kernel")(_odd_kernel)
+
+
 class _Classic(_Model):
     """Keys every classic family shares (:mod:`.classic`): what a window becomes."""
 
@@ -435,7 +512,8 @@ class SvmConfig(_Classic):
 
 ModelConfig = Annotated[
     LstmConfig | Cnn1dConfig | Cnn2dSpectrogramConfig | FnnConfig | MlpConfig
-    | Cnn2dLayoutConfig | LogisticConfig | RandomForestConfig | HistGbConfig | SvmConfig,
+    | Cnn2dLayoutConfig | Cnn2dFramesConfig | LogisticConfig | RandomForestConfig
+    | HistGbConfig | SvmConfig,
     Field(discriminator="family"),
 ]
 #: The config classes of the classic families.
@@ -484,6 +562,10 @@ class TrainConfig(_Model):
             raise ValueError(
                 f"model.n_fft (={m.n_fft}) must be <= data.window (={self.data.window})"
             )
+        if isinstance(m, Cnn2dFramesConfig) and self.data.frames is None:
+            raise ValueError(f"model.family cnn2d_frames reads image sequences: set "
+                             f"data.stream: {FRAMES_STREAM} (data.stream is "
+                             f"{self.data.stream!r})")
         if isinstance(m, CLASSIC_CONFIGS):
             kinds = [t.kind for t in self.data.targets]
             if kinds != ["classification"]:
@@ -549,6 +631,8 @@ def memory_estimate(cfg: TrainConfig) -> tuple[float, str, str, tuple[Any, ...]]
     (``"`model.hidden` (=64)"``), what the largest part is for, and the key's location."""
     d, m, o = cfg.data, cfg.model, cfg.optim
     c, w, b = len(d.channels), d.window, o.batch_size
+    if d.frames is not None:  # every pixel value is a channel
+        c = max(c, d.frames.n_values)
     sizes: list[tuple[tuple[Any, ...], int]] = [(("data", "window"), w)]
     if isinstance(m, CLASSIC_CONFIGS):  # no batches: the windows' inputs, as float64
         return (8.0 * w * c * b, f"`data.window` (={w})",
@@ -583,6 +667,17 @@ def memory_estimate(cfg: TrainConfig) -> tuple[float, str, str, tuple[Any, ...]]
         sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
         sizes.append((("model", "kernel"), m.kernel))
         out = m.channels[-1] * rows * cols
+    elif isinstance(m, Cnn2dFramesConfig):
+        fr = d.frames or FramesConfig()
+        chans = [len(fr.planes), *m.channels]
+        params = sum(a * b_ * m.kernel ** 2 for a, b_ in zip(chans, chans[1:], strict=False))
+        cells = fr.height * fr.width
+        params += m.channels[-1] * cells * m.embed + 4 * m.temporal_layers * (
+            (m.embed + m.hidden) * m.hidden + 2 * m.hidden)
+        acts = 2 * b * w * cells * sum(m.channels)
+        sizes += [(("model", "channels", i), v) for i, v in enumerate(m.channels)]
+        sizes += [(("model", "embed"), m.embed), (("model", "hidden"), m.hidden)]
+        out = m.hidden
     else:  # the spectrogram CNN
         cells = (m.n_fft // 2 + 1) * (w // m.hop + 1)
         chans = [c, *m.channels]
@@ -639,11 +734,13 @@ _ALLOWED: dict[tuple[str, ...], type[BaseModel]] = {
     (): TrainConfig, ("data",): DataConfig, ("optim",): OptimConfig,
     ("data", "baseline"): BaselineConfig, ("data", "augment"): AugmentConfig,
     ("data", "split"): SplitConfig, ("data", "targets"): TargetConfig,
+    ("data", "frames"): FramesConfig,
 }
 _FAMILY_MODELS: dict[str, type[BaseModel]] = {
     "lstm": LstmConfig, "cnn1d": Cnn1dConfig, "cnn2d_spectrogram": Cnn2dSpectrogramConfig,
     "fnn": FnnConfig, "mlp": MlpConfig, "cnn2d_layout": Cnn2dLayoutConfig,
-    "logistic": LogisticConfig, "random_forest": RandomForestConfig, "hist_gb": HistGbConfig,
+    "cnn2d_frames": Cnn2dFramesConfig, "logistic": LogisticConfig,
+    "random_forest": RandomForestConfig, "hist_gb": HistGbConfig,
     "svm": SvmConfig,
 }
 
@@ -673,9 +770,10 @@ def _describe(err: dict[str, Any], keys: tuple[Any, ...]) -> str:
     return f"`{key}`: {msg}{shown}"
 
 
-__all__ = ["CLASSIC_CONFIGS", "CLASSIC_FAMILIES", "FAMILIES", "FEATURE_NAMES",
+__all__ = ["CLASSIC_CONFIGS", "CLASSIC_FAMILIES", "FAMILIES", "FEATURE_NAMES", "FRAMES_STREAM",
            "LEVEL_FREE_FEATURES", "SUMMARY_FEATURES", "AugmentConfig", "BaselineConfig",
-           "Cnn1dConfig", "Cnn2dLayoutConfig", "Cnn2dSpectrogramConfig", "DataConfig",
+           "Cnn1dConfig", "Cnn2dFramesConfig", "Cnn2dLayoutConfig", "Cnn2dSpectrogramConfig",
+           "DataConfig", "FramesConfig",
            "FnnConfig", "HistGbConfig", "LogisticConfig", "LstmConfig", "MlpConfig",
            "ModelConfig", "OptimConfig", "RandomForestConfig", "SplitConfig", "SvmConfig",
            "TargetConfig", "TrainConfig", "load_config", "parse_config"]

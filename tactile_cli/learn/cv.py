@@ -67,6 +67,7 @@ from .data import (
     read_trials,
     resolve_channels,
 )
+from .device import resolve_device
 from .drift import (
     SHIFT_THRESHOLD_SD,
     input_shift,
@@ -87,7 +88,7 @@ from .metrics import (
 )
 from .models import count_parameters, state_size_bytes
 from .splits import FoldPlan, cv_folds, default_by
-from .train import GivenSplits, predict, train
+from .train import GivenSplits, predict_on, train
 from .trial_metrics import trial_votes
 
 FOLDS_DIR = "folds"
@@ -156,11 +157,12 @@ def _plan_record(config: TrainConfig, paths: Sequence[Path], plan: FoldPlan) -> 
 
 
 def _train_fold(config_yaml: dict[str, Any], paths: list[str], fold_dir: str,
-                mapping: dict[str, str], command: str, source: str) -> dict[str, Any]:
+                mapping: dict[str, str], command: str, source: str, device: str = "auto"
+                ) -> dict[str, Any]:
     """One fold (in a worker process or in this one): a complete run folder."""
     config = parse_config(config_yaml)
     result = train(config, paths, fold_dir, command=command,
-                   given=GivenSplits(mapping, source, "cv"))
+                   given=GivenSplits(mapping, source, "cv"), device=device)
     return {"best_epoch": result.best_epoch, "epochs_run": len(result.history),
             "train_time_s": result.train_time_s, "n_trials": result.n_trials,
             "n_windows": result.n_windows, "best_val_loss": result.best_val_loss,
@@ -179,10 +181,13 @@ def train_cv(
     command: str | None = None,
     on_plan: Callable[[FoldPlan, list[int]], None] | None = None,
     on_fold: Callable[[int, dict[str, Any]], None] | None = None,
+    device: str = "auto",
 ) -> CvTrainResult:
     """Train one model per fold and write the cross-validated run folder ``out`` (see the
     module docstring). ``on_plan(plan, finished)`` is called once the folds are known,
-    ``on_fold(index, summary)`` after each fold."""
+    ``on_fold(index, summary)`` after each fold. ``device``: where each fold trains
+    (:mod:`.device`)."""
+    resolve_device(device)  # `cuda` without a GPU: refused before any work
     started = time.perf_counter()
     out = Path(out)
     if out.exists() and out.is_dir() and not overwrite:
@@ -217,7 +222,7 @@ def train_cv(
     def args(fold: Any) -> tuple[Any, ...]:
         mapping = {trials[i].key: s for i, s in enumerate(fold.assignment.splits)}
         return (raw, str_paths, str(partial / FOLDS_DIR / fold_name(fold.index)), mapping,
-                command, f"cv fold {fold.index} of {len(plan.folds)}")
+                command, f"cv fold {fold.index} of {len(plan.folds)}", device)
 
     summaries: dict[int, dict[str, Any]] = {}
     if jobs == 1:
@@ -387,6 +392,7 @@ def evaluate_cv(
     overwrite: bool = False,
     split: Literal["all", "test"] = "all",
     shift_threshold_sd: float = SHIFT_THRESHOLD_SD,
+    device: str = "auto",
 ) -> EvalResult:
     """Evaluate every fold's model on its held-out trials and pool them (module docstring).
     The input shift and interleaving of :mod:`.drift` are taken fold by fold (each fold's
@@ -396,6 +402,7 @@ def evaluate_cv(
     data are refused, since the folds are defined on those trials. ``split`` is accepted for
     symmetry with :func:`.evaluate.evaluate`: a fold is always scored on its held-out trials.
     """
+    dev = resolve_device(device)
     run_path = Path(run_dir)
     info = runs.read_run_info(run_path)
     cv = info["cv"]
@@ -446,7 +453,7 @@ def evaluate_cv(
                                   threshold_sd=shift_threshold_sd))
         inter.append(interleaving(held, run.info.get("recording_order")))
         model = run.load_model()
-        out = predict(model, ws)
+        out, used = predict_on(model, ws, dev)
         for h in run.heads:  # regression values back to their units, fold by fold
             if h.kind == "regression":
                 m, s = run.normalisation.targets.get(h.name, (0.0, 1.0))
@@ -485,7 +492,7 @@ def evaluate_cv(
         out_dir=out_dir, command=command if command is not None else current_command(),
         created_utc=utc_now(), input=input_record(spec, first.input), notes=notes,
         cv=cv_record, origin=data_origin(paths),
-        extra={"shift": pooled_shift(shifts, fold_ids).as_dict(),
+        extra={"device": used, "shift": pooled_shift(shifts, fold_ids).as_dict(),
                "interleaving": pooled_interleaving(inter, fold_ids).as_dict()})
     write_eval(result, first.heads, pooled, decoded, {}, overwrite=overwrite)
     return result

@@ -140,7 +140,12 @@ def resolve_channels(data: DataConfig, paths: Sequence[str | Path]) -> DataConfi
             raise InputError("the file has no trials", path=path)
         trial = f.trial(f.trial_names[0])
         where = f"{trial.where}/signals/{data.stream}"
-        if trial.has_signal(data.stream):
+        if data.frames is not None and trial.has_frames:
+            from .frames import frame_channel_names
+
+            names = frame_channel_names(data.frames)
+            where = f"{trial.where}/frames"
+        elif trial.has_signal(data.stream):
             names = list(trial.signal_sensor(data.stream).channel_names)
         elif data.stream == "event_counts" and trial.has_events:
             names = ["positive", "negative", "net"]
@@ -179,6 +184,8 @@ def read_trials(paths: Sequence[str | Path], data: DataConfig, *, trained: bool 
 def _read_trial(trial: Trial, data: DataConfig, sample_targets: list[str], trained: bool
                 ) -> TrialSeries:
     path = trial.path
+    if data.frames is not None:
+        return _read_frames(trial, data, sample_targets, trained)
     if trial.has_signal(data.stream):
         where = f"{trial.where}/signals/{data.stream}"
         sensor = trial.signal_sensor(data.stream)
@@ -220,6 +227,38 @@ def _read_trial(trial: Trial, data: DataConfig, sample_targets: list[str], train
     raise InputError(f"trial has no stream {data.stream!r}{hint} (streams: "
                      f"{', '.join(trial.signal_names) or 'none'}); fix data.stream",
                      path=path, where=trial.where)
+
+
+def _read_frames(trial: Trial, data: DataConfig, sample_targets: list[str], trained: bool
+                 ) -> TrialSeries:
+    """A trial's image frames as the series of :mod:`.frames` (``data.stream: frames``)."""
+    from .frames import FRAME_UNIT, frame_channel_names, frame_series, select_columns
+
+    assert data.frames is not None
+    path, where = trial.path, f"{trial.where}/frames"
+    if not trial.has_frames:
+        raise InputError("trial has no image frames (data.stream: frames needs an image "
+                         "recording: ingest image folders or a simulated camera scene)",
+                         path=path, where=trial.where)
+    if sample_targets:
+        raise InputError(f"image frames carry no per-sample labels ({', '.join(sample_targets)}"
+                         "); use `source: trial` targets", path=path, where=where)
+    names = frame_channel_names(data.frames)
+    known = set(names)
+    for ch in data.channels:
+        if ch not in known:
+            todo = "the run was trained on other frame channels; retrain on these data" \
+                if trained else "use channels: [\"*\"] or names like " + names[0]
+            raise InputError(f"channel {ch!r} is not a pixel of data.frames ({names[0]} ... "
+                             f"{names[-1]}); {todo}", path=path, where=where)
+    frames = trial.frames()
+    x = select_columns(frame_series(frames, data.frames), names, data.channels)
+    t_s = np.asarray(frames.t_s, dtype=np.float64)
+    steps = np.diff(t_s)
+    period = float(np.median(steps)) if steps.size and np.median(steps) > 0 else math.nan
+    return TrialSeries(str(path), trial.name, trial.split, x, t_s, {}, {}, trial.labels,
+                       "frames", frames.sensor_name, period, tuple(data.channels),
+                       (FRAME_UNIT,) * len(data.channels), _time_origin(trial))
 
 
 def _count_events(trial: Trial, data: DataConfig, sample_targets: list[str]) -> TrialSeries:

@@ -32,6 +32,7 @@ from ..store.provenance import current_command, utc_now
 from . import runs
 from .cv import evaluate_cv
 from .data import check_heads_match, data_files, make_windows, read_trials
+from .device import resolve_device
 from .drift import SHIFT_THRESHOLD_SD, input_shift, interleaving
 from .inputs import checked_input, input_record
 from .metrics import (
@@ -51,7 +52,7 @@ from .metrics import (
 )
 from .models import count_parameters, state_size_bytes
 from .splits import held_out_trials
-from .train import predict
+from .train import predict_on
 
 
 def evaluate(
@@ -66,6 +67,7 @@ def evaluate(
     overwrite: bool = False,
     exported: str | Path | None = None,
     shift_threshold_sd: float = SHIFT_THRESHOLD_SD,
+    device: str = "auto",
 ) -> EvalResult:
     """Evaluate a run on data files and write ``RUN/eval/<name>/`` (an existing evaluation
     of that name is an error unless ``overwrite``; the folder is written atomically).
@@ -87,9 +89,13 @@ def evaluate(
     the training split per channel (key ``shift``; channels beyond ``shift_threshold_sd``
     training standard deviations flagged) and whether they are interleaved in recording
     order with the trials the run learned from (key ``interleaving``; :mod:`.drift`).
+
+    ``device``: where the model predicts (``auto``, ``cpu`` or ``cuda``; :mod:`.device`),
+    recorded in metrics.json ``device``; latency is always measured on the CPU.
     """
     if not (math.isfinite(shift_threshold_sd) and shift_threshold_sd > 0):
         raise InputError(f"`shift_threshold_sd` must be a number > 0, got {shift_threshold_sd}")
+    dev = resolve_device(device)
     info = runs.read_run_info(Path(run_dir))
     if info.get("cv") is not None:
         if exported is not None:
@@ -97,7 +103,7 @@ def evaluate(
                              "(RUN/folds/fold_00) of the cross-validated run", path=run_dir)
         return evaluate_cv(run_dir, data_paths, name=name, latency=latency, threads=threads,
                            command=command, overwrite=overwrite, split=split,
-                           shift_threshold_sd=shift_threshold_sd)
+                           shift_threshold_sd=shift_threshold_sd, device=device)
     if not data_paths:
         raise InputError("no data files; give `data_paths`")
     run = runs.load_run(run_dir)
@@ -122,7 +128,7 @@ def evaluate(
         raise InputError(f"the data give no windows (window {cfg.data.window} samples); "
                          "are the trials shorter than the window?")
     model = run.load_model()
-    outputs = predict(model, ws)
+    outputs, used = predict_on(model, ws, dev)
     metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
                                     cfg.data.boundary_margin)
     lat = measure_latency_of(model, ws, threads) if latency else None
@@ -130,6 +136,7 @@ def evaluate(
         "shift": input_shift(trials, cfg.data, run.normalisation,
                              threshold_sd=shift_threshold_sd).as_dict(),
         "interleaving": interleaving(trials, run.info.get("recording_order")).as_dict(),
+        "device": used,
     }
     if exported is not None:
         from .export import check_exported, raw_windows

@@ -65,9 +65,9 @@ INPUT_NAME = "window"
 #: (:func:`.classic_onnx.deployed_graph`); TorchScript has no form for them.
 EXPORTABLE: dict[str, frozenset[str]] = {
     "onnx": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp", "cnn2d_layout",
-                       *CLASSIC_FAMILIES}),
+                       "cnn2d_frames", *CLASSIC_FAMILIES}),
     "torchscript": frozenset({"lstm", "cnn1d", "cnn2d_spectrogram", "fnn", "mlp",
-                              "cnn2d_layout"}),
+                              "cnn2d_layout", "cnn2d_frames"}),
 }
 
 

@@ -96,6 +96,8 @@ def same_period(a: float, b: float) -> bool:
 def _where(trial: TrialSeries, stream: str) -> str:
     if trial.origin == "events":
         return f"/trials/{trial.trial}/events (counted as {stream})"
+    if trial.origin == "frames":
+        return f"/trials/{trial.trial}/frames"
     return f"/trials/{trial.trial}/signals/{stream}"
 
 

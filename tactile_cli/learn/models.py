@@ -19,6 +19,8 @@ turns a window into a feature vector; the heads are small fully connected networ
 - ``cnn2d_layout``: the channels laid out as an image at their places on the sensor (an
   electrode layout such as the BioTac SP's), 2-D convolutions, flattened
   (:mod:`.layout_cnn`; issue 34).
+- ``cnn2d_frames``: image sequences (``data.stream: frames``), a 2-D CNN per frame and an
+  LSTM or temporal convolution over the frames (:mod:`.frame_cnn`; issue 35).
 
 The classic families (logistic regression, random forest, gradient boosting, SVM) are not
 networks and not in this registry: :mod:`.classic`.
@@ -42,10 +44,12 @@ from .config import (
     Cnn1dConfig,
     Cnn2dSpectrogramConfig,
     FnnConfig,
+    FramesConfig,
     LstmConfig,
     MlpConfig,
     ModelConfig,
 )
+from .frame_cnn import FrameSequenceTrunk
 from .heads import HeadSpec
 from .layout_cnn import LayoutCnnTrunk
 
@@ -220,7 +224,8 @@ class MlpTrunk(nn.Module):
         return self.dense(self.summary(x))
 
 
-#: family name -> trunk class, built as ``cls(config, window, n_channels)``.
+#: family name -> trunk class, built as ``cls(config, window, n_channels)`` (and the
+#: image-sequence input's :class:`~.config.FramesConfig` for ``cnn2d_frames``).
 REGISTRY: dict[str, Callable[..., nn.Module]] = {
     "lstm": LstmTrunk,
     "cnn1d": Cnn1dTrunk,
@@ -228,6 +233,7 @@ REGISTRY: dict[str, Callable[..., nn.Module]] = {
     "fnn": FnnTrunk,
     "mlp": MlpTrunk,
     "cnn2d_layout": LayoutCnnTrunk,
+    "cnn2d_frames": FrameSequenceTrunk,
 }
 
 
@@ -257,11 +263,16 @@ class MultiTaskNet(nn.Module):
 
 
 def build_model(cfg: ModelConfig, *, window: int, n_channels: int,
-                heads: Sequence[HeadSpec]) -> MultiTaskNet:
-    """The network of ``cfg.family`` for windows of (window, n_channels) and these heads."""
+                heads: Sequence[HeadSpec], frames: FramesConfig | None = None
+                ) -> MultiTaskNet:
+    """The network of ``cfg.family`` for windows of (window, n_channels) and these heads;
+    ``frames``: the image-sequence input (``data.frames``) that ``cnn2d_frames`` needs."""
     if cfg.family not in REGISTRY:
         raise ValueError(f"`family` (={cfg.family!r}) must be one of {tuple(REGISTRY)}")
-    trunk = REGISTRY[cfg.family](cfg, window, n_channels)
+    if cfg.family == "cnn2d_frames":
+        trunk: nn.Module = FrameSequenceTrunk(cfg, window, n_channels, frames)  # type: ignore[arg-type]
+    else:
+        trunk = REGISTRY[cfg.family](cfg, window, n_channels)
     return MultiTaskNet(trunk, heads, cfg.head_hidden, cfg.dropout)
 
 

@@ -65,6 +65,7 @@ def train_run(
     on_plan: Callable[[FoldPlan, list[int]], None] | None = None,
     on_fold: Callable[[int, dict[str, Any]], None] | None = None,
     on_line: Callable[[str], None] | None = None,
+    device: str = "auto",
 ) -> TrainResult | CvTrainResult:
     """Train ``config`` (a YAML file or a validated config; ``seed`` and ``epochs``
     override its own) on ``data_paths`` into run folder ``out`` (default
@@ -78,11 +79,15 @@ def train_run(
     ``on_start(prepared, config)`` (the data read, the config with the overrides) and
     ``on_epoch`` (one model) or ``on_plan`` and ``on_fold`` (cross-validation) report
     progress; ``on_line`` gets the same as lines for people (:func:`start_line`,
-    :func:`plan_line`, :func:`fold_line`; not the epochs). Returns the run's summary (its
-    ``warnings`` include the fold plan's); bad input is one :class:`InputError`.
+    :func:`plan_line`, :func:`fold_line`; not the epochs). ``device``: ``auto`` (CUDA when
+    torch sees it), ``cpu`` or ``cuda`` (:mod:`.device`; recorded in run.json). Returns the
+    run's summary (its ``warnings`` include the fold plan's); bad input is one
+    :class:`InputError`.
     """
     from .config import TrainConfig, load_config
+    from .device import resolve_device
 
+    resolve_device(device)  # a bad value or `cuda` without a GPU: before any work
     config_path = None if isinstance(config, TrainConfig) else Path(config)
     paths = [Path(p) for p in data_paths]
     if not paths:
@@ -131,7 +136,7 @@ def train_run(
 
         return train_cv(cfg, paths, out, k=parse_cv(cv), jobs=jobs, config_path=config_path,
                         overwrite=overwrite, command=command, on_plan=planned,
-                        on_fold=folded)
+                        on_fold=folded, device=device)
     from .train import GivenSplits, train
 
     given = None
@@ -140,7 +145,8 @@ def train_run(
 
         given = GivenSplits(read_split_csv(split_from), str(split_from), "csv")
     return train(cfg, paths, out, config_path=config_path, overwrite=overwrite,
-                 command=command, on_epoch=on_epoch, on_start=started, given=given)
+                 command=command, on_epoch=on_epoch, on_start=started, given=given,
+                 device=device)
 
 
 def _with_overrides(cfg: TrainConfig, *, seed: int | None, epochs: int | None) -> TrainConfig:
@@ -240,6 +246,7 @@ def evaluate_run(
     shift_threshold_sd: float = 1.0,
     command: str | None = None,
     on_level: Callable[[str, float, float], None] | None = None,
+    device: str = "auto",
 ) -> EvaluateRunResult:
     """Evaluate the run in ``run_dir`` on ``data_paths`` into ``RUN/eval/<name>/`` (see
     :func:`.evaluate.evaluate`; a cross-validated run needs no data: each fold is scored on
@@ -251,12 +258,15 @@ def evaluate_run(
     (:func:`.perturb.perturb_runs`; ``on_level`` reports each level).
     ``shift_threshold_sd``: a channel whose mean in the evaluated data lies further than
     this many training standard deviations from the training data's is flagged
-    (:mod:`.drift`).
+    (:mod:`.drift`). ``device``: where the model predicts (``auto``, ``cpu``, ``cuda``;
+    :mod:`.device`; recorded in metrics.json ``device``).
     """
     from . import runs
+    from .device import resolve_device
     from .evaluate import evaluate
     from .perturb import PERTURB_DIR, parse_threshold
 
+    resolve_device(device)  # a bad value or `cuda` without a GPU: before any work
     run_dir = Path(run_dir)
     files = [Path(p) for p in data_paths or []]
     cross_validated = runs.read_run_info(run_dir).get("cv") is not None
@@ -279,7 +289,8 @@ def evaluate_run(
                       [*files, *([exported] if exported is not None else [])])
     result = evaluate(run_dir, files or None, split=split, name=name, latency=latency,
                       threads=threads, command=command, overwrite=overwrite,
-                      exported=exported, shift_threshold_sd=shift_threshold_sd)
+                      exported=exported, shift_threshold_sd=shift_threshold_sd,
+                      device=device)
     perturbed = None
     if perturb is not None:
         from .perturb import perturb_runs

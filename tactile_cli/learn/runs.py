@@ -132,7 +132,7 @@ class Run:
             return load_classic(self)  # type: ignore[return-value]
         d = self.config.data
         model = build_model(self.config.model, window=d.window, n_channels=len(d.channels),
-                            heads=self.heads)
+                            heads=self.heads, frames=d.frames)
         weights = self.path / MODEL_PT
         try:
             state = torch.load(weights, map_location="cpu", weights_only=True)

@@ -352,23 +352,26 @@ def run_one(spec: dict[str, Any]) -> dict[str, Any]:
     from .train import train
 
     cfg = _parse(spec["config"])
+    device = spec.get("device", "auto")
     result = train(cfg, spec["train_data"], spec["run_dir"], config_path=spec["config_file"],
-                   overwrite=True, command=spec["command"])
+                   overwrite=True, command=spec["command"], device=device)
     ev = evaluate(spec["run_dir"], spec["eval_data"], split=spec["split"],
-                  name=spec["eval_name"], threads=1, command=spec["command"], overwrite=True)
+                  name=spec["eval_name"], threads=1, command=spec["command"], overwrite=True,
+                  device=device)
     return {"run_dir": spec["run_dir"], "train_time_s": result.train_time_s,
             "epochs_run": len(result.history), "n_windows": ev.n_windows}
 
 
 def task_spec(run: PlannedRun, *, out: Path, train_data: Sequence[Path],
-              eval_data: Sequence[Path], split: str, eval_name: str, command: str
-              ) -> dict[str, Any]:
-    """The picklable task of one run: absolute paths and plain values only."""
+              eval_data: Sequence[Path], split: str, eval_name: str, command: str,
+              device: str = "auto") -> dict[str, Any]:
+    """The picklable task of one run: absolute paths and plain values only (``device``
+    is resolved on the worker that runs it: :mod:`.device`)."""
     return {"name": run.name, "config": run.config, "config_file": run.config_file,
             "train_data": [str(p.resolve()) for p in train_data],
             "eval_data": [str(p.resolve()) for p in eval_data], "split": split,
             "eval_name": eval_name, "run_dir": str((out / RUNS_DIR / run.name).resolve()),
-            "command": command}
+            "command": command, "device": device}
 
 
 def is_finished(run_dir: Path, run: PlannedRun, eval_name: str,
@@ -509,6 +512,7 @@ def run_sweep(
     on_progress: Callable[[SweepCounts], None] | None = None,
     on_run: Callable[[str, bool, str | None], None] | None = None,
     on_line: Callable[[str], None] | None = None,
+    device: str = "auto",
 ) -> SweepResult:
     """Plan, run (on Dask: see :func:`tactile_cli.batch.map_tasks` for ``scheduler`` and
     ``workers``), collect and chart a sweep into folder ``out``.
@@ -521,11 +525,16 @@ def run_sweep(
     the grid once planned, ``on_progress`` the counts, ``on_run`` each run's name, success
     and error as it ends, ``on_line`` the same as lines for people. ``config``: the sweep
     file (its path then stands for ``config_path``) or a loaded one. A failed run is a row
-    of the result (``n_failed``), never an exception.
+    of the result (``n_failed``), never an exception. ``device``: where each run trains
+    and predicts (``auto``, ``cpu``, ``cuda``; resolved on the worker, :mod:`.device`);
+    ``cuda`` is refused here when torch sees no GPU and no scheduler is given.
     """
     from ..batch import SCHEDULER_ENV, default_workers, map_tasks
+    from .device import DEVICES, resolve_device
 
     started = time.perf_counter()
+    if device not in DEVICES or (scheduler is None and not os.environ.get(SCHEDULER_ENV)):
+        resolve_device(device)
     if workers:  # 0: in this process
         check_threads(workers, "workers")
     if not isinstance(config, SweepConfig):
@@ -595,7 +604,8 @@ def run_sweep(
             on_progress(SweepCounts(c.total, c.done, c.running, c.failed, n_skipped, n_na))
 
     specs = [task_spec(r, out=work, train_data=train_paths, eval_data=eval_paths,
-                       split=config.eval.split, eval_name=eval_name, command=command)
+                       split=config.eval.split, eval_name=eval_name, command=command,
+                       device=device)
              for r in todo]
     if not todo:
         progress(_Counts(0, 0, 0, 0))

@@ -46,6 +46,7 @@ from .data import (
     resolve_channels,
     resolve_heads,
 )
+from .device import device_name, resolve_device
 from .drift import recording_record
 from .figures import plot_curves
 from .heads import HeadSpec, primary_head
@@ -105,6 +106,8 @@ class TrainResult:
     best_val_accuracy: float
     heads: list[HeadSpec] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    device: str = "cpu"
+    """Where the network trained (:mod:`.device`): ``cpu`` or ``cuda (<GPU name>)``."""
 
     def as_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -182,15 +185,16 @@ def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
 PREDICT_THREADS = 1
 
 
-def predict(model: nn.Module, ws: WindowSet, *, batch_size: int = 4096
-            ) -> dict[str, np.ndarray]:
+def predict(model: nn.Module, ws: WindowSet, *, batch_size: int = 4096,
+            device: torch.device | None = None) -> dict[str, np.ndarray]:
     """Raw outputs (logits or standardised values) of every window: head -> (n, k) / (n,).
 
     Bit-identical whatever the process's torch thread count (a Dask worker runs with one,
     ``workers=0`` and a plain ``evaluate`` with the machine's cores): torch splits a
     layer's reductions by its intra-op thread count, which changes the last bit of some
     outputs, so every batch of ``batch_size`` windows runs on :data:`PREDICT_THREADS`
-    thread(s) and the caller's count is restored afterwards."""
+    thread(s) and the caller's count is restored afterwards. ``device``: where the model
+    is (:mod:`.device`; default the CPU), the batches go there and the outputs come back."""
     model.eval()
     outs: dict[str, list[np.ndarray]] = {}
     previous = torch.get_num_threads()
@@ -199,20 +203,40 @@ def predict(model: nn.Module, ws: WindowSet, *, batch_size: int = 4096
         with torch.inference_mode():
             for lo in range(0, len(ws), batch_size):
                 idx = np.arange(lo, min(lo + batch_size, len(ws)))
-                for k, v in model(torch.from_numpy(ws.windows(idx))).items():
-                    outs.setdefault(k, []).append(v.numpy())
+                batch = torch.from_numpy(ws.windows(idx))
+                if device is not None and device.type != "cpu":
+                    batch = batch.to(device)
+                for k, v in model(batch).items():
+                    outs.setdefault(k, []).append(v.cpu().numpy())
     finally:
         torch.set_num_threads(previous)
     return {k: np.concatenate(v) for k, v in outs.items()}
 
 
+def predict_on(model: Any, ws: Any, device: Any) -> tuple[dict[str, np.ndarray], str]:
+    """The outputs of :func:`.train.predict` on ``device`` (a network; a classic family and
+    the CPU predict as before), the model back on the CPU afterwards, and the device's
+    name."""
+    if device.type == "cpu" or not isinstance(model, torch.nn.Module) \
+            or getattr(model, "n_parameters", None) is not None:
+        return predict(model, ws), "cpu"
+    model.to(device)
+    try:
+        return predict(model, ws, device=device), device_name(device)
+    finally:
+        model.cpu()
+
+
 def _validate(model: nn.Module, ws: WindowSet, heads: Sequence[HeadSpec],
-              weights: dict[str, torch.Tensor] | None, batch_size: int) -> tuple[float, float]:
+              weights: dict[str, torch.Tensor] | None, batch_size: int,
+              device: torch.device) -> tuple[float, float]:
     """(loss, primary-head accuracy) on a window set; NaN when it is empty."""
     if len(ws) == 0:
         return math.nan, math.nan
-    outputs = {k: torch.from_numpy(v) for k, v in predict(model, ws, batch_size=batch_size)
-               .items()}
+    outputs = {k: torch.from_numpy(v) for k, v in predict(model, ws, batch_size=batch_size,
+                                                          device=device).items()}
+    if weights is not None and device.type != "cpu":
+        weights = {k: v.cpu() for k, v in weights.items()}
     targets = batch_targets(ws, np.arange(len(ws)))
     with torch.inference_mode():
         loss = float(multitask_loss(outputs, targets, heads, weights).total)
@@ -256,15 +280,18 @@ def train(
     on_epoch: Callable[[EpochRecord], None] | None = None,
     on_start: Callable[[Prepared], None] | None = None,
     given: GivenSplits | None = None,
+    device: str = "auto",
 ) -> TrainResult:
     """Train ``config`` on ``data_paths`` and write the run folder ``out``.
 
     ``on_start`` is called once the data are ready, ``on_epoch`` after every epoch (for
     progress display); ``given``: splits from a CSV or a cross-validation fold instead of
     the config's rule. Channel patterns of the config (``ele*``) are resolved against the
-    data and the resolved names saved. Returns the summary; raises :class:`InputError` for
-    bad data.
+    data and the resolved names saved. ``device``: ``auto``, ``cpu`` or ``cuda``
+    (:mod:`.device`; recorded in run.json ``training.device``; a classic family always
+    runs on the CPU). Returns the summary; raises :class:`InputError` for bad data.
     """
+    dev = resolve_device(device)
     if config.model.family in CLASSIC_FAMILIES:  # scikit-learn, stored as ONNX (issue 34)
         from .classic import train_classic
 
@@ -287,7 +314,7 @@ def train(
         d = config.data
         torch.manual_seed(config.seed)
         model = build_model(config.model, window=d.window, n_channels=len(d.channels),
-                            heads=prep.heads)
+                            heads=prep.heads, frames=d.frames)
         train_ws, val_ws = prep.windows["train"], prep.windows["val"]
         _set_feature_stats(model, train_ws, prep.normalisation)
         weights = None
@@ -295,6 +322,11 @@ def train(
             weights = {h.name: torch.tensor(class_weights(train_ws.targets[h.name],
                                                           len(h.classes)), dtype=torch.float32)
                        for h in prep.heads if h.kind == "classification"}
+        on_gpu = dev.type != "cpu"
+        if on_gpu:
+            model.to(dev)
+        dev_weights = None if weights is None or not on_gpu else \
+            {k: v.to(dev) for k, v in weights.items()}
         if opt_cfg.optimizer == "adam":
             optim: torch.optim.Optimizer = torch.optim.Adam(
                 model.parameters(), lr=opt_cfg.lr, weight_decay=opt_cfg.weight_decay)
@@ -328,9 +360,15 @@ def train(
                 else:
                     batch = train_ws.normalise(augment_windows(train_ws.raw_windows(idx),
                                                                d.augment, aug_rng))
-                outputs = model(torch.from_numpy(batch))
-                loss = multitask_loss(outputs, batch_targets(train_ws, idx), prep.heads,
-                                      weights).total
+                if on_gpu:
+                    outputs = model(torch.from_numpy(batch).to(dev))
+                    loss = multitask_loss(
+                        outputs, {k: v.to(dev) for k, v in batch_targets(train_ws, idx).items()},
+                        prep.heads, dev_weights).total
+                else:
+                    outputs = model(torch.from_numpy(batch))
+                    loss = multitask_loss(outputs, batch_targets(train_ws, idx), prep.heads,
+                                          weights).total
                 optim.zero_grad(set_to_none=True)
                 loss.backward()
                 if opt_cfg.grad_clip:
@@ -343,7 +381,7 @@ def train(
             if schedule is not None:
                 schedule.step()
             val_loss, val_acc = _validate(model, val_ws, prep.heads, weights,
-                                          opt_cfg.batch_size * 8)
+                                          opt_cfg.batch_size * 8, dev)
             if len(val_ws) == 0:
                 score = -epoch  # no validation: the last epoch is the best
             elif opt_cfg.monitor == "val_loss":
@@ -366,6 +404,8 @@ def train(
                 break
         train_time = time.perf_counter() - train_started
         model.load_state_dict(best_state)
+        if on_gpu:  # the run folder holds CPU weights, loadable anywhere
+            model.cpu()
         model.eval()
 
     best = history[best_epoch - 1]
@@ -403,7 +443,8 @@ def train(
         "training": {"epochs_run": len(history), "best_epoch": best_epoch,
                      "stopped_early": stopped_early, "monitor": opt_cfg.monitor,
                      "best_val_loss": best.val_loss, "best_val_accuracy": best.val_accuracy,
-                     "train_time_s": train_time, "threads": threads, "deterministic": True},
+                     "train_time_s": train_time, "threads": threads, "deterministic": True,
+                     "device": device_name(dev), "device_requested": device},
     }
     rows = [r.as_dict() for r in history]
 
@@ -433,9 +474,9 @@ def train(
         wall_time_s=float(info["wall_time_s"]), train_time_s=train_time, threads=threads,
         n_trials=n_trials, n_windows=n_windows, best_val_loss=best.val_loss,
         best_val_accuracy=best.val_accuracy, heads=prep.heads,
-        warnings=list(prep.assignment.warnings),
+        warnings=list(prep.assignment.warnings), device=device_name(dev),
     )
 
 
 __all__ = ["EpochRecord", "GivenSplits", "Prepared", "TrainResult", "batch_targets",
-           "deterministic", "predict", "prepare", "train"]
+           "deterministic", "predict", "predict_on", "prepare", "train"]

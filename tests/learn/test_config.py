@@ -77,7 +77,8 @@ def test_cli_unknown_key_exits_2_naming_key_and_file(tmp_path, action_file):
     assert result.stderr.strip() == (
         f"tactile: error: {path}, line 6: unknown key `data.windw` (allowed here: stream, "
         "channels, window, stride, pad, label_rule, label_delay, targets, bin_s, transform, "
-        "normalise, window_norm, class_weights, split, boundary_margin, baseline, augment)")
+        "normalise, window_norm, class_weights, split, boundary_margin, baseline, augment, "
+        "frames)")
     assert not (tmp_path / "run").exists()
 
 

@@ -34,8 +34,9 @@ def _model_cfg(family: str, **extra):
 
 
 def test_registry_has_the_six_families():
-    # cnn2d_layout needs whole sensors of a layout: tests/learn/test_layout_cnn.py
-    assert set(REGISTRY) == set(FAMILIES) | {"cnn2d_layout"}
+    # cnn2d_layout needs whole sensors of a layout: tests/learn/test_layout_cnn.py;
+    # cnn2d_frames image sequences: tests/learn/test_frame_cnn.py
+    assert set(REGISTRY) == set(FAMILIES) | {"cnn2d_layout", "cnn2d_frames"}
 
 
 @pytest.mark.parametrize("family", list(FAMILIES))
