@@ -13,6 +13,7 @@ OPTION_FLAGS: dict[str, str] = {
     "reference": "--reference",
     "px_per_mm": "--px-per-mm",
     "skip_unknown": "--skip-unknown",
+    "trials_from": "--trials-from",
 }
 
 __all__ = ["OPTION_FLAGS"]

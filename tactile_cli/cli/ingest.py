@@ -72,7 +72,8 @@ def ingest_command(
     ] = "auto",
     mapping: Annotated[
         Path | None,
-        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml)."
+        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml) "
+                     "or the topics of a ROS bag/MCAP (configs/rosbag_tactile_rig.yaml)."
                      + _formats("mapping"), metavar="FILE"),
     ] = None,
     label: Annotated[
@@ -121,6 +122,14 @@ def ingest_command(
             help="Image folders: pixels per millimetre on the gel (DIGIT-like: 16), stored as "
             "the sensor attribute px_per_mm for calibration and height maps."
             + _formats("px_per_mm"),
+        ),
+    ] = None,
+    trials_from: Annotated[
+        Path | None,
+        typer.Option(
+            "--trials-from", metavar="FILE",
+            help="Robot recordings: CSV of trial time ranges (start_s,end_s[,trial,labels...], "
+            "seconds from the recording's first message)." + _formats("trials_from"),
         ),
     ] = None,
     annotations: Annotated[
@@ -191,7 +200,8 @@ def ingest_command(
         labels = parse_labels(label or [])
         flagged = {"mapping": mapping, "width_px": width, "height_px": height,
                    "sensor_name": sensor, "frame_rate_hz": fps, "reference": reference,
-                   "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None}
+                   "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None,
+                   "trials_from": trials_from}
         options = parse_options(option or [], flagged)
         level = Compression(None if compression < 0 else compression)
         if out_dir is not None:

@@ -42,8 +42,8 @@ def samples(tmp_path_factory) -> Path:
 
 
 def test_every_registered_format_keeps_the_contract():
-    assert list(FORMATS) == ["aedat4", "events-npy", "events-csv", "images", "accel-tree",
-                             "mapped-csv"]
+    assert list(FORMATS) == ["aedat4", "events-npy", "events-csv", "rosbag", "mcap", "images",
+                             "accel-tree", "mapped-csv"]
     for name, fmt in FORMATS.items():
         assert isinstance(fmt, IngestFormat) and fmt.name == name
         assert fmt.title and fmt.summary and "\n" not in fmt.summary
@@ -188,7 +188,8 @@ def test_help_lists_the_formats_and_which_take_each_flag():
     for fmt in FORMATS.values():
         assert f"{fmt.name}: " in flat
     assert "Frame rate of image folders" in flat and "Formats: images." in flat
-    assert "chunk_events (aedat4, events-npy, events-csv); sample_rate_hz (accel-tree)" in flat
+    assert ("chunk_events (aedat4, events-npy, events-csv); sort_stamps (rosbag, mcap); "
+            "sample_rate_hz (accel-tree)") in flat
 
 
 def test_import_and_help_stay_light():
