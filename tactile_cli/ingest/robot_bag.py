@@ -292,10 +292,13 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
           trials: list[_Trial], starts: np.ndarray, writer: StoreWriter,
           options: RobotOptions) -> None:
     t_ns = _stamp(st, msg, log_ns, mapping)
-    k = int(np.searchsorted(starts, t_ns, side="right")) - 1
-    if k < 0 or t_ns >= trials[k].span.end_ns:
-        st.outside += 1
-        return
+    if trials[0].span.takes_all:
+        k = 0
+    else:
+        k = int(np.searchsorted(starts, t_ns, side="right")) - 1
+        if k < 0 or t_ns >= trials[k].span.end_ns:
+            st.outside += 1
+            return
     index = st.n
     st.n += 1
     if k > st.newest:  # trials before the one before this message's are complete

@@ -238,13 +238,21 @@ def row_reader(rec: RobotRecording, topic: str, msgtype: str, first: Any,
         names, read = _multiarray(first)
         return RowReader(names, [""] * len(names), read)
     if kind in ("geometry_msgs/WrenchStamped", "geometry_msgs/Wrench"):
-        paths = WRENCH_FIELDS if kind.endswith("Stamped") else [p[7:] for p in WRENCH_FIELDS]
-        names, read = path_reader(paths, first)
-        return RowReader([p.replace("wrench.", "").replace(".", "_") for p in paths],
-                         ["N"] * 3 + ["N m"] * 3, read)
+        stamped = kind.endswith("Stamped")
+
+        def read_wrench(msg: Any) -> np.ndarray:  # the hot path: attributes, no path walk
+            w = msg.wrench if stamped else msg
+            f, t = w.force, w.torque
+            return np.array([f.x, f.y, f.z, t.x, t.y, t.z], dtype=np.float64)
+
+        return RowReader([p[7:].replace(".", "_") for p in WRENCH_FIELDS],
+                         ["N"] * 3 + ["N m"] * 3, read_wrench)
     if kind == "sensor_msgs/Imu":
-        _, read = path_reader(IMU_FIELDS, first)
-        return RowReader([p.replace(".", "_") for p in IMU_FIELDS], list(IMU_UNITS), read)
+        def read_imu(msg: Any) -> np.ndarray:
+            q, a, v = msg.orientation, msg.angular_velocity, msg.linear_acceleration
+            return np.array([q.x, q.y, q.z, q.w, a.x, a.y, a.z, v.x, v.y, v.z], dtype=np.float64)
+
+        return RowReader([p.replace(".", "_") for p in IMU_FIELDS], list(IMU_UNITS), read_imu)
     if kind == "sensor_msgs/JointState":
         return _joint_state(first, topic, rec)
     if kind in IMAGE_TYPES:

@@ -33,12 +33,14 @@ OPEN_END_NS = 2**63 - 1
 
 @dataclass
 class TrialSpan:
-    """One trial: name, [start_ns, end_ns) on the recording's clock, labels."""
+    """One trial: name, [start_ns, end_ns) on the recording's clock, labels; takes_all: the
+    whole recording (every message belongs, even one stamped before the first log time)."""
 
     name: str
     start_ns: int
     end_ns: int
     labels: dict[str, str | int | float] = field(default_factory=dict)
+    takes_all: bool = False
 
 
 def recording_name(path: Path) -> str:
@@ -47,7 +49,7 @@ def recording_name(path: Path) -> str:
 
 
 def whole_recording(rec: RobotRecording, start_ns: int) -> list[TrialSpan]:
-    return [TrialSpan(recording_name(rec.path), start_ns, OPEN_END_NS)]
+    return [TrialSpan(recording_name(rec.path), start_ns, OPEN_END_NS, takes_all=True)]
 
 
 def marker_trials(rec: RobotRecording, marker: Marker, start_ns: int) -> tuple[list[TrialSpan],
