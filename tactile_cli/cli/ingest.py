@@ -156,6 +156,14 @@ def ingest_command(
             + _formats("skip_unknown"),
         ),
     ] = False,
+    sort_stamps: Annotated[
+        bool,
+        typer.Option(
+            "--sort-stamps",
+            help="Robot recordings: sort the samples of a stream whose stamps go back (without "
+            "it such a stream is refused, with the count)." + _formats("sort_stamps"),
+        ),
+    ] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
                                             "--out-dir: ingest up-to-date inputs again).")
                          ] = False,
@@ -201,7 +209,7 @@ def ingest_command(
         flagged = {"mapping": mapping, "width_px": width, "height_px": height,
                    "sensor_name": sensor, "frame_rate_hz": fps, "reference": reference,
                    "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None,
-                   "trials_from": trials_from}
+                   "trials_from": trials_from, "sort_stamps": sort_stamps or None}
         options = parse_options(option or [], flagged)
         level = Compression(None if compression < 0 else compression)
         if out_dir is not None:

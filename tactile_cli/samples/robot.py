@@ -61,8 +61,8 @@ def _types(ros1: bool) -> Any:
 def press_force_n(t_s: np.ndarray) -> np.ndarray:
     """The press's normal force in N at trial times ``t_s`` (s): smooth up at 0.2 s, down at
     0.7 s, 5 N held."""
-    rise = 1 / (1 + np.exp(-(t_s - 0.2) / 0.02))
-    fall = 1 / (1 + np.exp((t_s - 0.7) / 0.02))
+    rise = 0.5 * (1 + np.tanh((t_s - 0.2) / 0.04))  # logistic steps, no overflow far out
+    fall = 0.5 * (1 - np.tanh((t_s - 0.7) / 0.04))
     return 5.0 * rise * fall
 
 

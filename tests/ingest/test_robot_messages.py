@@ -168,6 +168,15 @@ def test_header_stamps_that_go_back_are_counted_and_sorted_only_when_asked(tmp_p
                        r"ft; pass `sort_stamps=True`"):
         ingest([bag], tmp_path / "o.h5", options={"mapping": mapping})
     assert not (tmp_path / "o.h5").exists()
+    from typer.testing import CliRunner
+
+    from tactile_cli.cli import app
+
+    cli = CliRunner().invoke(app, ["ingest", str(bag), "--mapping", str(mapping), "--out",
+                                   str(tmp_path / "o.h5")])
+    assert cli.exit_code == 2 and cli.output.strip().endswith(
+        "2 stamp(s) go back in trial ft; pass --sort-stamps to sort the samples by stamp, or "
+        "map the topic with `time: log`")
     notes: list[str] = []
     out = ingest([bag], tmp_path / "o.h5", options={"mapping": mapping, "sort_stamps": True},
                  on_note=notes.append)
