@@ -296,3 +296,19 @@ def test_ingest_without_a_mapping_says_how(recordings, tmp_path):
     line = _refuse(["ingest", str(path), "--out", str(out)], out)
     assert line.startswith(f"tactile: error: {path}: a robot recording needs a topic mapping to "
                            "be ingested: pass --mapping topics.yaml")
+
+
+def test_trials_from_flag_reaches_the_cli(recordings, tmp_path):
+    path, rig = recordings["ros2-mcap"]
+    mapping = tmp_path / "m.yaml"
+    mapping.write_text("streams:\n  - {topic: /taxels, name: taxels, kind: taxel_array}\n")
+    ranges = tmp_path / "trials.csv"
+    ranges.write_text("start_s,end_s\n0.1,0.2\n")
+    out = tmp_path / "o.h5"
+    result = runner.invoke(app, ["ingest", str(path), "--mapping", str(mapping), "--trials-from",
+                                 str(ranges), "--out", str(out), "--no-progress"])
+    assert result.exit_code == 0, result.output
+    with h5py.File(out) as h5:
+        assert list(h5["trials"]) == ["rig_mcapbag_1"]
+        np.testing.assert_array_equal(h5["trials/rig_mcapbag_1/signals/taxels/data"][:],
+                                      rig.taxels[10:20])
