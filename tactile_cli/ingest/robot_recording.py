@@ -89,6 +89,17 @@ def damaged(path: Path, exc: BaseException) -> InputError:
                       path=path)
 
 
+def require_robot_extra(what: str, modules: tuple[str, ...] = ("rosbags", "mcap")) -> None:
+    """InputError saying how to install the ``robot`` extra when one of ``modules`` is
+    missing (they are optional dependencies: ``pip install 'tactile-cli[robot]'``)."""
+    import importlib.util
+
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    if missing:
+        raise InputError(f"reading {what} needs {', '.join(missing)}, which is not installed; "
+                         "install the robot extra: pip install 'tactile-cli[robot]'")
+
+
 def _reader_errors() -> tuple[type[BaseException], ...]:
     """The exceptions the readers raise for damaged files."""
     from mcap.exceptions import McapError
@@ -139,6 +150,7 @@ class RobotRecording:
             raise InputError("is not a robot recording (a .bag file, a ROS 2 bag folder with "
                              "metadata.yaml, or a .mcap file)", path=path)
         self.kind = kind
+        require_robot_extra("ROS bags and MCAP files")
         self._errors = _reader_errors()
         self._reader: Any = None
         self._file: Any = None
@@ -320,4 +332,4 @@ class RobotRecording:
 
 
 __all__ = ["BAG_SUFFIX", "MCAP_SUFFIX", "ROS2_METADATA", "RobotRecording", "TopicInfo",
-           "damaged", "is_ros2_folder", "recording_kind", "short_type"]
+           "damaged", "is_ros2_folder", "recording_kind", "require_robot_extra", "short_type"]

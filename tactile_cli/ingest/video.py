@@ -78,6 +78,9 @@ def _errors() -> tuple[type[BaseException], ...]:
 
 
 def _open(path: Path) -> Any:
+    from .robot_recording import require_robot_extra
+
+    require_robot_extra("videos", ("av",))
     import av
 
     try:

@@ -36,7 +36,8 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
         taxel/              4x4 taxel CSVs at 100 Hz and their mapping taxels.yaml
         visuotactile/press_01, press_02   PNG frames + reference.png
         robot/              press.bag (ROS 1), press_ros2/ (ROS 2, mcap storage), press.mcap,
-                            press.mp4 and the topic mapping topics.yaml (two presses each)
+                            press.mp4 and the topic mapping topics.yaml (two presses each);
+                            written when the `robot` extra (rosbags, mcap, av) is installed
 
     Returns ``{"paths": {...}, "commands": {name: [args after "tactile"]}}``.
     """
@@ -84,9 +85,15 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
                 seed=seed + k,
                 frame_rate_hz=30.0,
             )
+        import importlib.util
+
         from .robot import write_robot_samples
 
-        write_robot_samples(tmp / "robot", seed=seed)
+        # the robot recordings need the optional `robot` extra (rosbags, mcap, av)
+        with_robot = all(importlib.util.find_spec(m) is not None
+                         for m in ("rosbags", "mcap", "mcap_ros2", "av"))
+        if with_robot:
+            write_robot_samples(tmp / "robot", seed=seed)
         robot = out / "robot"  # where it will be
     return {
         "paths": {"root": out},
@@ -100,12 +107,12 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
                 str(out / "visuotactile" / "press_01"),
                 str(out / "visuotactile" / "press_02"),
             ],
-            "ros1_bag": ["ingest", str(robot / "press.bag"), "--mapping",
+            **({"ros1_bag": ["ingest", str(robot / "press.bag"), "--mapping",
+                             str(robot / "topics.yaml")],
+                "ros2_bag": ["ingest", str(robot / "press_ros2"), "--mapping",
+                             str(robot / "topics.yaml")],
+                "mcap": ["ingest", str(robot / "press.mcap"), "--mapping",
                          str(robot / "topics.yaml")],
-            "ros2_bag": ["ingest", str(robot / "press_ros2"), "--mapping",
-                         str(robot / "topics.yaml")],
-            "mcap": ["ingest", str(robot / "press.mcap"), "--mapping",
-                     str(robot / "topics.yaml")],
-            "video": ["ingest", str(robot / "press.mp4")],
+                "video": ["ingest", str(robot / "press.mp4")]} if with_robot else {}),
         },
     }

@@ -312,3 +312,13 @@ def test_trials_from_flag_reaches_the_cli(recordings, tmp_path):
         assert list(h5["trials"]) == ["rig_mcapbag_1"]
         np.testing.assert_array_equal(h5["trials/rig_mcapbag_1/signals/taxels/data"][:],
                                       rig.taxels[10:20])
+
+
+def test_a_missing_optional_reader_says_which_extra_to_install():
+    from tactile_cli.ingest.robot_recording import require_robot_extra
+
+    with pytest.raises(InputError) as exc:
+        require_robot_extra("ROS bags", ("rosbags", "no_such_reader_module"))
+    assert str(exc.value) == ("reading ROS bags needs no_such_reader_module, which is not "
+                              "installed; install the robot extra: pip install "
+                              "'tactile-cli[robot]'")
