@@ -53,6 +53,10 @@ demo: $(STAMP)
 	$(TACTILE) ingest $(DEMO)/raw/accel_tree --format accel-tree $(SAMPLES_LABELS) --out $(DEMO)/h5/accel_tree.h5
 	$(TACTILE) ingest $(DEMO)/raw/taxel --mapping $(DEMO)/raw/taxel/taxels.yaml $(SAMPLES_LABELS) --out $(DEMO)/h5/taxel.h5
 	$(TACTILE) ingest $(DEMO)/raw/visuotactile/press_01 $(DEMO)/raw/visuotactile/press_02 $(SAMPLES_LABELS) --out $(DEMO)/h5/visuotactile.h5
+	$(TACTILE) ingest $(DEMO)/raw/robot/press.bag --mapping configs/rosbag_tactile_rig.yaml --out $(DEMO)/h5/rosbag1.h5
+	$(TACTILE) ingest $(DEMO)/raw/robot/press_ros2 --mapping configs/rosbag_tactile_rig.yaml --out $(DEMO)/h5/rosbag2.h5
+	$(TACTILE) ingest $(DEMO)/raw/robot/press.mcap --mapping configs/rosbag_tactile_rig.yaml --out $(DEMO)/h5/mcap.h5
+	$(TACTILE) ingest $(DEMO)/raw/robot/press.mp4 $(SAMPLES_LABELS) --out $(DEMO)/h5/video.h5
 	@if [ -d "$(SHARED)" ]; then \
 	  set -e; echo "real recordings from $(SHARED):"; \
 	  $(TACTILE) ingest $(SHARED)/aedat4/dvxplorer_sample.aedat4 --label origin=recorded --label dataset=dvxplorer_sample --label "lab=iniVation DVXplorer sample, from the tonic project test data" --out $(DEMO)/h5/dvxplorer.h5; \

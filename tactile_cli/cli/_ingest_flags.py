@@ -13,6 +13,8 @@ OPTION_FLAGS: dict[str, str] = {
     "reference": "--reference",
     "px_per_mm": "--px-per-mm",
     "skip_unknown": "--skip-unknown",
+    "trials_from": "--trials-from",
+    "sort_stamps": "--sort-stamps",
 }
 
 __all__ = ["OPTION_FLAGS"]

@@ -72,7 +72,8 @@ def ingest_command(
     ] = "auto",
     mapping: Annotated[
         Path | None,
-        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml)."
+        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml) "
+                     "or the topics of a ROS bag/MCAP (configs/rosbag_tactile_rig.yaml)."
                      + _formats("mapping"), metavar="FILE"),
     ] = None,
     label: Annotated[
@@ -123,6 +124,14 @@ def ingest_command(
             + _formats("px_per_mm"),
         ),
     ] = None,
+    trials_from: Annotated[
+        Path | None,
+        typer.Option(
+            "--trials-from", metavar="FILE",
+            help="Robot recordings: CSV of trial time ranges (start_s,end_s[,trial,labels...], "
+            "seconds from the recording's first message)." + _formats("trials_from"),
+        ),
+    ] = None,
     annotations: Annotated[
         Path | None,
         typer.Option(
@@ -145,6 +154,14 @@ def ingest_command(
             help="AEDAT4: leave out streams of a type tactile does not read (poses, bounding "
             "boxes, ...), with a note; without it such a file is refused."
             + _formats("skip_unknown"),
+        ),
+    ] = False,
+    sort_stamps: Annotated[
+        bool,
+        typer.Option(
+            "--sort-stamps",
+            help="Robot recordings: sort the samples of a stream whose stamps go back (without "
+            "it such a stream is refused, with the count)." + _formats("sort_stamps"),
         ),
     ] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
@@ -191,7 +208,8 @@ def ingest_command(
         labels = parse_labels(label or [])
         flagged = {"mapping": mapping, "width_px": width, "height_px": height,
                    "sensor_name": sensor, "frame_rate_hz": fps, "reference": reference,
-                   "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None}
+                   "px_per_mm": px_per_mm, "skip_unknown": skip_unknown or None,
+                   "trials_from": trials_from, "sort_stamps": sort_stamps or None}
         options = parse_options(option or [], flagged)
         level = Compression(None if compression < 0 else compression)
         if out_dir is not None:

@@ -22,12 +22,17 @@ from .events_aedat4 import AEDAT4
 from .events_table import EVENTS_CSV, EVENTS_NPY
 from .image_sequence import IMAGES
 from .mapped_csv import MAPPED_CSV
+from .robot_bag import MCAP, ROSBAG
+from .video import VIDEO
 
 #: format name -> format, in the order auto-detection tries them
 FORMATS: dict[str, IngestFormat[Any]] = {f.name: f for f in (
     AEDAT4,      # .aedat4 files (or the AEDAT4 magic bytes)
     EVENTS_NPY,  # .npy files (or the NumPy magic bytes)
     EVENTS_CSV,  # .csv files (a header t,x,y,p)
+    ROSBAG,      # .bag files and ROS 2 bag folders (metadata.yaml)
+    MCAP,        # .mcap files
+    VIDEO,       # .mp4/.avi/.mov/.mkv files, or folders of them
     IMAGES,      # folders with PNG/JPG frames, or with subfolders of them
     ACCEL_TREE,  # folders <object>/<orientation>/<speed>/<file>.csv of 8 columns
     MAPPED_CSV,  # .csv/.tsv files and folders of CSVs; any input when `mapping` is given

@@ -35,6 +35,9 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
         accel_tree/         object/orientation/speed/data.csv, 8 kHz (paper 001 layout)
         taxel/              4x4 taxel CSVs at 100 Hz and their mapping taxels.yaml
         visuotactile/press_01, press_02   PNG frames + reference.png
+        robot/              press.bag (ROS 1), press_ros2/ (ROS 2, mcap storage), press.mcap,
+                            press.mp4 and the topic mapping topics.yaml (two presses each);
+                            written when the `robot` extra (rosbags, mcap, av) is installed
 
     Returns ``{"paths": {...}, "commands": {name: [args after "tactile"]}}``.
     """
@@ -82,6 +85,16 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
                 seed=seed + k,
                 frame_rate_hz=30.0,
             )
+        import importlib.util
+
+        from .robot import write_robot_samples
+
+        # the robot recordings need the optional `robot` extra (rosbags, mcap, av)
+        with_robot = all(importlib.util.find_spec(m) is not None
+                         for m in ("rosbags", "mcap", "mcap_ros2", "av"))
+        if with_robot:
+            write_robot_samples(tmp / "robot", seed=seed)
+        robot = out / "robot"  # where it will be
     return {
         "paths": {"root": out},
         "commands": {
@@ -94,5 +107,12 @@ def write_all(out_dir: str | Path, *, seed: int = 0, n_events: int = 200_000) ->
                 str(out / "visuotactile" / "press_01"),
                 str(out / "visuotactile" / "press_02"),
             ],
+            **({"ros1_bag": ["ingest", str(robot / "press.bag"), "--mapping",
+                             str(robot / "topics.yaml")],
+                "ros2_bag": ["ingest", str(robot / "press_ros2"), "--mapping",
+                             str(robot / "topics.yaml")],
+                "mcap": ["ingest", str(robot / "press.mcap"), "--mapping",
+                         str(robot / "topics.yaml")],
+                "video": ["ingest", str(robot / "press.mp4")]} if with_robot else {}),
         },
     }

@@ -13,7 +13,8 @@ from tactile_cli.cli import app
 
 runner = CliRunner()
 N_EVENTS = 300
-FORMATS = ("events_csv", "events_npy", "accel", "taxel", "visuotactile")
+FORMATS = ("events_csv", "events_npy", "accel", "taxel", "visuotactile", "ros1_bag", "ros2_bag",
+           "mcap", "video")
 
 
 def _samples(out, *args):
@@ -70,8 +71,11 @@ def test_samples_same_seed_same_bytes(tmp_path):
     _samples(tmp_path / "b", "--seed", "7")
     _samples(tmp_path / "c", "--seed", "8")
     a, b, c = (_tree(tmp_path / k) for k in "abc")
-    assert len(a) == 39  # 2 event files, 4 accel CSVs, 4 taxel CSVs + mapping, 2 x 14 image files
+    # 2 event files, 4 accel CSVs, 4 taxel CSVs + mapping, 2 x 14 image files, and robot/:
+    # press.bag, press.mcap, press.mp4, topics.yaml, press_ros2/{metadata.yaml,press_ros2.mcap}
+    assert len(a) == 45
     assert a == b
     assert a.keys() == c.keys()
     differ = {k for k in a if a[k] != c[k]}
-    assert {"events.csv", "events.npy", "visuotactile/press_01/frame_5.png"} <= differ
+    assert {"events.csv", "events.npy", "visuotactile/press_01/frame_5.png", "robot/press.bag",
+            "robot/press.mcap"} <= differ

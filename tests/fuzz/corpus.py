@@ -796,6 +796,30 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
             d = add("aedat4", ae, "events.aedat4", mutation, "raw", apply)
             case(d, "ingest", ingest_ae, expect)
             case(d, "info", info_raw, expect)
+    # robot recordings (issue 31): ROS 1 bag, standalone MCAP, MP4; their topic mapping
+    robot = raw / "robot"
+    if robot.exists():
+        ingest_rec = ["ingest", "{IN}", "--mapping", "{BASE}/raw/robot/topics.yaml",
+                      "--out", "{OUT}/o.h5", "--no-progress"]
+        for name, entry in (("rosbag", "press.bag"), ("mcap", "press.mcap")):
+            for mutation, apply, expect in [
+                ("truncate-0.5", lambda p: _truncate(p, 0.5), REFUSE),
+                ("truncate-0.97", lambda p: _truncate(p, 0.97), REFUSE),
+                ("truncate-header", lambda p: _truncate(p, 0.001), REFUSE),
+                ("zeros-chunk", lambda p: _zero(p, p.stat().st_size // 3, 4096), EITHER),
+                ("flip-body", lambda p: _flip(p, [p.stat().st_size // 2], rng), EITHER),
+                ("empty", lambda p: p.write_bytes(b""), REFUSE),
+            ]:
+                d = add(name, robot / entry, entry, mutation, "raw", apply)
+                case(d, "ingest", ingest_rec, expect)
+                case(d, "info", info_raw, expect)
+        ingest_video = ["ingest", "{IN}", "--out", "{OUT}/o.h5", "--no-progress"]
+        for mutation, apply in [("truncate-0.5", lambda p: _truncate(p, 0.5)),
+                                ("truncate-header", lambda p: _truncate(p, 0.01)),
+                                ("empty", lambda p: p.write_bytes(b""))]:
+            d = add("video", robot / "press.mp4", "press.mp4", mutation, "raw", apply)
+            case(d, "ingest", ingest_video, REFUSE)
+            case(d, "info", info_raw, EITHER)
     # annotations and trial labels of an ingest
     for name, flag in (("annotations.csv", "--annotations"),
                        ("trial_labels.csv", "--trial-labels")):

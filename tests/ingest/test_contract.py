@@ -42,8 +42,8 @@ def samples(tmp_path_factory) -> Path:
 
 
 def test_every_registered_format_keeps_the_contract():
-    assert list(FORMATS) == ["aedat4", "events-npy", "events-csv", "images", "accel-tree",
-                             "mapped-csv"]
+    assert list(FORMATS) == ["aedat4", "events-npy", "events-csv", "rosbag", "mcap", "video",
+                             "images", "accel-tree", "mapped-csv"]
     for name, fmt in FORMATS.items():
         assert isinstance(fmt, IngestFormat) and fmt.name == name
         assert fmt.title and fmt.summary and "\n" not in fmt.summary
@@ -148,7 +148,7 @@ def test_wrong_option_refused_before_anything_is_written(samples, tmp_path):
      "that take it: aedat4"),
     (["{raw}/accel_tree", "--format", "accel-tree", "--sensor", "acc"],
      "--sensor is not an option of the accelerometer CSV tree format (accel-tree); formats "
-     "that take it: aedat4, events-npy, events-csv, images"),
+     "that take it: aedat4, events-npy, events-csv, video, images"),
     (["{raw}/events.npy", "--width", "640", "-O", "width_px=320"],
      "--option sets --width a second time (--width is given already)"),
     (["{raw}/events.npy", "-O", "chunk"], "--option 'chunk' must look like key=value"),

@@ -152,7 +152,8 @@ def test_image_folders(samples):
 
 def test_every_format_is_described(samples):
     """The registry's formats all have a describe that the tests above reach."""
-    reached = {"aedat4", "events-csv", "events-npy", "accel-tree", "mapped-csv", "images"}
+    reached = {"aedat4", "events-csv", "events-npy", "accel-tree", "mapped-csv", "images",
+               "rosbag", "mcap", "video"}  # tests/ingest/test_robot_bag.py, test_video.py
     assert set(FORMATS) == reached
 
 
