@@ -1,6 +1,7 @@
 """The fenced code blocks of the documentation pages and the markers that say how each runs.
 
-The rule (``docs/contributing-docs.md``): each fenced ``sh``, ``bash`` or ``python`` block of
+The rule (``docs/contributing-docs.md``): each fenced shell or Python block (``sh``, ``bash``,
+``python``, and a fence with no language, which could be either) of
 ``docs/**/*.md`` and ``README.md`` sits right under one of these HTML comments:
 
 - ``<!-- run -->``: cheap (seconds); ``tests/docs`` runs it, and ``make docs-figures`` too;
@@ -28,7 +29,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 DOCS = REPO / "docs"
-CODE_LANGUAGES = {"sh", "bash", "python"}
+CODE_LANGUAGES = {"sh", "bash", "shell", "console", "python", "py", "pycon", ""}
 MARKERS = {"run", "figures", "not run", "file"}
 _FENCE = re.compile(r"^(?P<indent> *)```(?P<lang>[\w-]*)[^\n]*$")
 _MARKER = re.compile(

@@ -44,7 +44,8 @@ def test_every_code_block_is_run_or_says_why_not():
 def test_marker_parser_reads_every_kind(tmp_path):
     page = tmp_path / "p.md"
     page.write_text("<!-- run -->\n```sh\necho a\n```\n\n<!-- not run: needs a GPU -->\n"
-                    "```python\nx = 1\n```\n<!-- file: m.yaml -->\n```yaml\na: 1\n```\n"
+                    "```python\nx = 1\n```\n<!-- file: m.yaml -->\n"
+                    "```yaml title=\"m.yaml\"\na: 1\n```\n"
                     "<!-- figures -->\n  ```sh\n  slow\n  ```\n```sh\nbare\n```\n",
                     encoding="utf-8")
     got = [(b.lang, b.marker, b.arg, b.text) for b in doc_blocks.blocks_of(page)]
