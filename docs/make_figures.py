@@ -44,7 +44,7 @@ FIGURES: dict[str, dict[str, str]] = {
     "tutorials/visuotactile.md": {
         "calibration.png": "calibration/*.png",
         "heightmap.png": "heightmaps/*.png",
-        "slip_height.png": "slip_height/*.png",
+        "slip_height.png": "slip_height/slip_cable_01_height.png",
         "monitor.png": "monitor/*.png",
     },
     "tutorials/active-vibration.md": {
