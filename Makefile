@@ -17,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz
+.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz docs docs-serve docs-figures
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -281,3 +281,26 @@ $(OUT)/%.h5: $(RAW)/% | $(STAMP)
 
 clean:
 	rm -rf $(DEMO) build dist *.egg-info .pytest_cache
+
+# ---- documentation site (issue 32): docs/ and mkdocs.yml, built into site/ ---------------
+#   make docs           install the `docs` extra into .venv, build site/ with --strict (a
+#                       broken link, a missing page or a bad API reference fails the build)
+#   make docs-serve     the same site on http://127.0.0.1:8000 while you edit
+#   make docs-figures   rerun the tutorials' commands on small generated data and refresh the
+#                       PNGs in docs/figures/ (committed; docs/make_figures.py, a few minutes)
+# The site needs no network to build or to view: no web fonts, no scripts from a CDN.
+DOCS_STAMP := $(VENV)/.docs-stamp
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[ml,dev,docs]"
+	touch $@
+
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir site
+	@if grep -rlE '<(script|link)[^>]+(src|href)="(https?:)?//' site --include='*.html'; then \
+	  echo "docs: the pages above load a script or stylesheet from the network"; exit 1; fi
+
+docs-serve: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs serve --strict
+
+docs-figures: $(STAMP)
+	$(BIN)/python docs/make_figures.py

@@ -247,8 +247,9 @@ def test_cli_export_evaluate_and_compare_show_the_exported_model(trained, heldou
 def _readme_snippet() -> str:
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
-    section = text[text.index("## The model on the robot"):]
+    page = Path(__file__).resolve().parents[2] / "docs" / "how-to" / "export-onnx.md"
+    text = page.read_text(encoding="utf-8")
+    section = text[text.index("## On the robot"):]
     start = section.index("```python\n") + len("```python\n")
     return section[start:section.index("```", start)]
 
