@@ -51,6 +51,7 @@ from . import validate as _validate
 from . import vibro_model as _vibro_model
 from ._errors import EXIT_INTERRUPTED
 from ._options import Abort, ClickException, NoArgsIsHelpError, finite_float_options, usage_error
+from ._panels import arrange
 
 #: Columns of ``--help`` when stdout is not a terminal (a pipe, a file, a test) and neither
 #: ``COLUMNS`` nor ``TERMINAL_WIDTH`` is set: rich would use 80 and cut long paths and
@@ -235,6 +236,7 @@ app.command("normal-labels", help="Calibration pixel table of the normal MLP fro
             "ball-bearing presses: contact circles, sphere normals (paper 002, eqs. 5-8).")(
     _normal_labels.normal_labels_command
 )
+arrange(app)
 
 
 def main() -> None:
