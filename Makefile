@@ -17,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test ingest bench lint clean fuzz docs docs-serve docs-figures
+.PHONY: sweep-vibro bench-long bench-scale demo demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test test-slow test-all ingest bench lint clean fuzz docs docs-serve docs-figures
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -29,7 +29,16 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[ml,dev]"
 	touch $@
 
+# `make test`: the quick tier (under 10 minutes on 2 cores); `make test-slow`: the end-to-end
+# tests marked slow (trainings, Dask clusters, the damaged-input subset, docs pages; about 15
+# minutes); `make test-all` (and CI): both.
 test: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow
+
+test-all: $(STAMP)
 	$(BIN)/python -m pytest -q
 
 lint: $(STAMP)

@@ -5,8 +5,11 @@ import h5py, typer, torch, JAX and dask."""
 from __future__ import annotations
 
 import ast
+import functools
 from collections import defaultdict
 from pathlib import Path
+
+import pytest
 
 import tactile_cli
 
@@ -84,6 +87,7 @@ def _imports(path: Path) -> tuple[set[str], set[str]]:
     return ours, theirs
 
 
+@functools.cache
 def _graph() -> tuple[dict[str, set[str]], dict[str, set[str]]]:
     units: dict[str, set[str]] = defaultdict(set)
     third: dict[str, set[str]] = defaultdict(set)
@@ -204,6 +208,7 @@ def test_the_rules_see_real_imports():
     assert "batch" in units["learn"] and third["distributed"] == {"batch"}
 
 
+@pytest.mark.slow
 def test_package_exposes_each_chain_verb_without_loading_torch_or_jax():
     import subprocess
     import sys

@@ -27,6 +27,7 @@ def _make(*args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
 def test_make_ingest_one_output_per_input_parallel_and_incremental(tmp_path):
     raw, out = tmp_path / "raw", tmp_path / "out"
@@ -60,6 +61,7 @@ def test_make_ingest_one_output_per_input_parallel_and_incremental(tmp_path):
     assert not list(out.glob(".*tmp*"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_ingest_keeps_the_earlier_output(tmp_path, sig):
     src = tmp_path / "big.csv"

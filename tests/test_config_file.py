@@ -34,6 +34,7 @@ def test_python_tags_are_still_refused(tmp_path):
 
 
 # -- nesting bounded (issue 33) ------------------------------------------------------------
+@pytest.mark.slow
 def test_yaml_and_json_nested_thousands_deep_are_one_error(tmp_path):
     from tactile_cli.config_file import MAX_NESTING, parse_json, parse_yaml
 

@@ -60,6 +60,7 @@ def _flags_in_library_messages() -> list[str]:
     return offenders
 
 
+@pytest.mark.slow
 def test_library_messages_name_no_cli_flags():
     offenders = _flags_in_library_messages()
     assert not offenders, ("library messages name CLI flags; name the Python argument in "

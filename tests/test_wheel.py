@@ -14,12 +14,14 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tactile_cli.store import StoreWriter
 
 REPO = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_installed_wheel_validates_a_file(tmp_path):
     wheels = tmp_path / "wheels"
     subprocess.run(

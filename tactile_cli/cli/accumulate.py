@@ -16,7 +16,8 @@ from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "bin_s": ("--bin-ms", seconds_as_ms), "smooth_bins": "--smooth", "csv": "--csv",
+    "bin_s": ("--bin-ms", seconds_as_ms), "smooth_bins": "--smooth", "out": "--out",
+    "csv": "--csv", "plot": "--plot",
 }
 
 

@@ -13,7 +13,7 @@ from ._options import JsonOption, OverwriteOption
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"config": "--rois"}
+FLAGS: dict[str, Flag] = {"out": "--out", "config": "--rois"}
 
 
 def centroids_command(

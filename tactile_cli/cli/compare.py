@@ -12,7 +12,10 @@ from ._errors import Flag, run_guarded
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"margin_pp": "--margin", "out_dir": "--out", "targets": "--target"}
+FLAGS: dict[str, Flag] = {
+    "data_name": "--data-name", "metric": "--metric", "margin_pp": "--margin", "out_dir": "--out",
+    "targets": "--target",
+}
 
 
 def compare_command(

@@ -17,7 +17,8 @@ from ._output import print_result
 
 FLAGS: dict[str, Flag] = {
     "band_hz": "--band", "band_width_hz": "--band-width", "width_hz": "--band-width",
-    "out": "--samples-out", "trials": "--trial", "rate_hz": "--rate", "follow_s": "--wait",
+    "plot": "--plot", "out": "--samples-out", "trial": "--trial", "trials": "--trial",
+    "rate_hz": "--rate", "scenario": "--scenario", "follow_s": "--wait",
 }
 
 

@@ -11,7 +11,9 @@ import typer
 from ._errors import Flag, run_guarded
 from ._options import JsonOption, data_files
 
-FLAGS: dict[str, Flag] = {"data_paths": "--data"}
+FLAGS: dict[str, Flag] = {
+    "data_paths": "--data", "stride": "--stride", "split": "--split", "threads": "--threads",
+}
 
 
 def detect_delay_command(

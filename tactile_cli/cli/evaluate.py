@@ -16,8 +16,10 @@ from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "data_paths": "--data FILE...", "exported": "--exported FILE",
-    "shift_threshold_sd": "--shift-threshold", **BATCH_FLAGS,
+    "data_paths": "--data FILE...", "split": "--split", "threshold": "--threshold",
+    "overwrite": "--overwrite", "name": "--name", "exported": "--exported FILE",
+    "perturb": "--perturb", "threads": "--threads", "shift_threshold_sd": "--shift-threshold",
+    "device": "--device", **BATCH_FLAGS,
 }
 
 

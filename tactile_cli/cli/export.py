@@ -11,7 +11,7 @@ from ._errors import Flag, run_guarded
 from ._output import echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"format": "--format"}
+FLAGS: dict[str, Flag] = {"format": "--format", "out": "--out", "overwrite": "--overwrite"}
 
 
 def export_command(

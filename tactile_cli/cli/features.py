@@ -15,7 +15,11 @@ from ._options import JsonOption, OverwriteOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", **BATCH_FLAGS}
+FLAGS: dict[str, Flag] = {
+    "groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir", "out": "--out",
+    "config": "--config", "stream": "--stream", "window_s": "--window-s", "hop_s": "--hop-s",
+    "nperseg": "--nperseg", **BATCH_FLAGS,
+}
 
 app = typer.Typer(
     name="features",

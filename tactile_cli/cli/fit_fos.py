@@ -21,8 +21,10 @@ from .progress import Spinner
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "bin_s": ("--bin-ms", seconds_as_ms),
-    "csv": "--csv",
-    "press_duration_s": "--press-duration", "write": "--no-write", **BATCH_FLAGS,
+    **{name: f"--{name.replace('_', '-')}" for name in (
+        "kind", "regions", "model", "units", "channels", "reduce", "region_label", "min_snr",
+        "stream", "csv", "plot", "solver", "max_steps", "rtol", "atol", "max_curves")},
+    "press_duration_s": "--press-duration", "p0": "--p0", "write": "--no-write", **BATCH_FLAGS,
 }
 
 Kind = enum.StrEnum("Kind", {k: k for k in KINDS})

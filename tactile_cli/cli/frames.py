@@ -12,7 +12,10 @@ from ._errors import Flag, run_guarded, seconds_as_ms
 from ._options import JsonOption
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"window_s": ("--window-ms", seconds_as_ms)}
+FLAGS: dict[str, Flag] = {
+    "window_s": ("--window-ms", seconds_as_ms), "median": "--median", "kind": "--kind",
+    "start_s": "--start-s", "end_s": "--end-s", "out": "--out",
+}
 
 
 def frames_command(

@@ -13,7 +13,10 @@ from ._options import JsonOption
 from ._output import print_blocks
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {}
+FLAGS: dict[str, Flag] = {
+    "label_key": "--label-key", "out": "--out", "plot": "--plot", "calibrate": "--calibrate",
+    "overlap": "--overlap", "config": "--config",
+}
 
 
 def grade_command(

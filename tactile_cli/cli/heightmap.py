@@ -13,7 +13,11 @@ from ._options import JsonOption, OverwriteOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"run_dir": "--model", "truth_dir": "--truth", "trials": "--trial"}
+FLAGS: dict[str, Flag] = {
+    "run_dir": "--model", "out": "--out", "truth_dir": "--truth", "px_per_mm": "--px-per-mm",
+    "skip_below": "--skip-below", "workers": "--workers", "trials": "--trial", "plot": "--plot",
+    "overwrite": "--overwrite",
+}
 
 
 def heightmap_command(

@@ -18,7 +18,9 @@ from ._ingest_flags import OPTION_FLAGS
 from ._output import print_blocks
 
 #: How this command spells the library arguments its errors name.
-FLAGS: dict[str, Flag] = {"format": "--format", "options": "--option", "json": "--json"}
+FLAGS: dict[str, Flag] = {
+    "format": "--format", "mapping": "--mapping", "options": "--option", "json": "--json",
+}
 
 
 def info_command(

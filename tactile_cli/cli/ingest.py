@@ -21,7 +21,8 @@ from .progress import ProgressOption, RichProgress
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "format": "--format", **OPTION_FLAGS, "options": "--option", "labels": "--label",
-    **BATCH_FLAGS, "json": "--json",
+    "annotations": "--annotations", "trial_labels": "--trial-labels", "out": "--out",
+    "out_dir": "--out-dir", **BATCH_FLAGS, "json": "--json",
 }
 OutDirScheduler = scheduler_option("--out-dir: ")
 OutDirWorkers = workers_option("--out-dir: ")

@@ -13,7 +13,11 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"model_run": "--model", "trials": "--trial"}
+FLAGS: dict[str, Flag] = {
+    "source": "--source", "model_run": "--model", "mesh": "--mesh", "hold_s": "--hold-s",
+    "motion_s": "--motion-s", "threshold": "--threshold", "n_static": "--n-static",
+    "trials": "--trial", "plot": "--plot",
+}
 
 
 def _ingest_frames(inputs: Path, out: Path, options: dict[str, Any]) -> Path:

@@ -13,7 +13,10 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"plot_dir": "--plot"}
+FLAGS: dict[str, Flag] = {
+    "out": "--out", "flat_per_press": "--flat-per-press", "seed": "--seed",
+    "overwrite": "--overwrite", "plot_dir": "--plot",
+}
 
 
 def normal_labels_command(

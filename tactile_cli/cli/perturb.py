@@ -13,7 +13,11 @@ from ._options import data_files, runs_and_files
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"run_dirs": "RUN", "data_paths": "--data FILE...", "out_dir": "--out"}
+FLAGS: dict[str, Flag] = {
+    "run_dirs": "RUN", "data_paths": "--data FILE...", "split": "--split",
+    "threshold": "--threshold", "levels": "--levels", "out_dir": "--out", "out": "--out",
+    "name": "--name", "seed": "--seed",
+}
 
 
 def perturb_command(

@@ -10,7 +10,7 @@ import typer
 from ._errors import Flag, run_guarded
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {}
+FLAGS: dict[str, Flag] = {"out": "--out", "max_trials": "--max-trials"}
 
 
 def plot_command(

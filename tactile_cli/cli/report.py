@@ -14,7 +14,7 @@ from ._options import data_files, runs_and_files
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "run_dirs": "RUN folders", "data_paths": "--data FILE", "figure_dirs": "--figures DIR",
-    "out_dir": "--out", "margin_pp": "--margin",
+    "out_dir": "--out", "metric": "--metric", "margin_pp": "--margin",
 }
 
 

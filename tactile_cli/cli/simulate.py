@@ -17,7 +17,7 @@ from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 #: How these commands spell the library arguments their errors name (each adds its own).
-FLAGS: dict[str, Flag] = {}
+FLAGS: dict[str, Flag] = {"seed": "--seed", "config": "--config"}
 
 app = typer.Typer(
     name="simulate",

@@ -13,7 +13,9 @@ from ._options import JsonOption, OverwriteOption, SceneConfigOption, SeedOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"objects": "--object"}
+FLAGS: dict[str, Flag] = {
+    "seed": "--seed", "objects": "--object", "interferences": "--interferences",
+}
 
 
 def digit_avoidance_command(

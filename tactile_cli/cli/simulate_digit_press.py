@@ -14,7 +14,10 @@ from ._options import JsonOption, OverwriteOption, SceneConfigOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"presses": "--calibration-presses", "per_object": "--trials"}
+FLAGS: dict[str, Flag] = {
+    "seed": "--seed", "overwrite": "--overwrite", "presses": "--calibration-presses",
+    "per_object": "--trials", "objects": "--objects",
+}
 
 
 def digit_press_command(

@@ -12,7 +12,9 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {}
+FLAGS: dict[str, Flag] = {
+    "folds": "--folds", "out": "--out", "plot": "--plot", "config": "--config",
+}
 
 
 def slip_interface_command(

@@ -14,7 +14,7 @@ from ._output import print_blocks
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``):
 #: the library takes the ROIs and optics as ``config``, this command as the --rois file.
-FLAGS: dict[str, Flag] = {"config": "--rois"}
+FLAGS: dict[str, Flag] = {"config": "--rois", "plot": "--plot"}
 
 
 def slip_rate_command(

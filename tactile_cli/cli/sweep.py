@@ -14,7 +14,10 @@ from ._options import DeviceOption
 from ._output import Progress, echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"train_data": "--data", **BATCH_FLAGS}
+FLAGS: dict[str, Flag] = {
+    "train_data": "--data", "eval_data": "--eval-data", "out": "--out", "device": "--device",
+    **BATCH_FLAGS,
+}
 SweepScheduler = scheduler_option("")
 SweepWorkers = workers_option("", unit="run")
 

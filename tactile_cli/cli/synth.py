@@ -12,7 +12,10 @@ from ._options import OverwriteOption
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"bin_s": ("--bin-ms", seconds_as_ms)}
+FLAGS: dict[str, Flag] = {
+    "centroids": "--centroids", "seed": "--seed", "n": "--n",
+    "bin_s": ("--bin-ms", seconds_as_ms), "out": "--out", "fits": "--fits",
+}
 
 
 def synth_command(

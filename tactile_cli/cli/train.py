@@ -12,7 +12,10 @@ from ._options import DeviceOption, data_files
 from ._output import Progress, echo_json, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"data_paths": "--data FILE...", "k": "--cv"}
+FLAGS: dict[str, Flag] = {
+    "data_paths": "--data FILE...", "k": "--cv", "jobs": "--jobs", "out": "--out",
+    "split_from": "--split-from", "seed": "--seed", "epochs": "--epochs", "device": "--device",
+}
 
 
 def train_command(

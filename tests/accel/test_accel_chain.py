@@ -70,6 +70,7 @@ def test_scene_writes_the_paper_tree_and_ingests_unchanged(scene: Path, tmp_path
     assert truth["seed"] == 0 and len(truth["recordings"]) == 12
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes_other_seed_other_bytes(scene: Path, tmp_path: Path):
     simulate_vibro_slip(_small(), tmp_path / "again", seed=0)
     simulate_vibro_slip(_small(), tmp_path / "other", seed=1)
@@ -208,6 +209,7 @@ def test_cli_simulate_help_json_and_errors(tmp_path: Path):
         assert runner.invoke(app, cmd).exit_code == 0
 
 
+@pytest.mark.slow
 def test_detect_delay_end_to_end(scene: Path, tmp_path: Path):
     """A tiny FNN trained for two epochs: the command runs, reports the keys, and the
     numbers hang together (the delay is the paper's definition, not a quality bar)."""

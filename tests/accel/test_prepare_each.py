@@ -9,6 +9,7 @@ import os
 import shutil
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.accel import VibroSceneConfig, simulate_vibro_slip
@@ -20,6 +21,7 @@ from ..ingest.test_ingest_out_dir import h5_differences
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_out_dir_equals_one_file_runs_and_restart_skips(tmp_path: Path):
     cfg = VibroSceneConfig.model_validate({"orientations_deg": [0], "motor_rps": [0.16],
                                            "duration_s": 1.0})

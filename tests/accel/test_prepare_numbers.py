@@ -51,6 +51,7 @@ def test_absurd_numbers_are_refused_with_the_reason(recording: Path, tmp_path: P
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_many_segments_within_the_bound_are_written(recording: Path, tmp_path: Path):
     res = runner.invoke(app, ["accel-prepare", str(recording), "--out", str(tmp_path / "p.h5"),
                               "--segment-s", "0.01", "--no-progress", "--json"])

@@ -37,6 +37,7 @@ def _specs(root: Path, dies: dict[str, str]) -> list[dict]:
             for name, die in dies.items()]
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_replaced_its_task_rerun_and_nothing_half_written(tmp_path):
     dies = {"once": "once", "never": "never", "always": "always"}
     results = {r.key: r for r in map_tasks(_write_or_die, _specs(tmp_path, dies),
@@ -63,6 +64,7 @@ def test_negative_retries_are_refused():
         list(map_tasks(natural_key, ["a"], workers=1, retries=-1))
 
 
+@pytest.mark.slow
 def test_a_scheduler_and_a_worker_started_as_separate_processes(tmp_path):
     """The `scheduler` path end to end: `dask scheduler` and `dask worker` as their own
     processes on the loopback address, found through the scheduler file."""

@@ -96,6 +96,7 @@ def test_a_folder_where_an_output_file_goes_is_one_line_exit_2(tmp_path, rec, ar
     assert list(d.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_plot_success_leaves_no_temporary_and_keeps_other_files(tmp_path, rec):
     out = tmp_path / "figs"
     out.mkdir()
@@ -119,6 +120,7 @@ def test_plot_failing_midway_leaves_nothing(tmp_path, rec, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # nor the parent it would have created
 
 
+@pytest.mark.slow
 def test_frames_failing_midway_keeps_the_earlier_output(tmp_path, rec, monkeypatch):
     from tactile_cli.spatial import render
 
@@ -141,6 +143,7 @@ def test_frames_failing_midway_keeps_the_earlier_output(tmp_path, rec, monkeypat
     assert _hidden(tmp_path) == [] and _hidden(out) == []
 
 
+@pytest.mark.slow
 def test_frames_interrupted_exits_130_and_keeps_the_earlier_output(tmp_path, rec, monkeypatch):
     from tactile_cli.spatial import render
 
@@ -161,6 +164,7 @@ def test_frames_interrupted_exits_130_and_keeps_the_earlier_output(tmp_path, rec
     assert _hidden(tmp_path) == [] and _hidden(out) == []
 
 
+@pytest.mark.slow
 def test_frames_overwrite_replaces_trial_folders_atomically(tmp_path, rec):
     out = tmp_path / "frames"
     assert runner.invoke(app, ["frames", str(rec), "--out", str(out)]).exit_code == 0
@@ -174,6 +178,7 @@ def test_frames_overwrite_replaces_trial_folders_atomically(tmp_path, rec):
     assert _hidden(tmp_path) == [] and _hidden(out) == []
 
 
+@pytest.mark.slow
 def test_samples_success_leaves_no_temporary(tmp_path):
     out = tmp_path / "s"
     result = runner.invoke(app, ["samples", str(out), "--n-events", "1000"])
@@ -182,6 +187,7 @@ def test_samples_success_leaves_no_temporary(tmp_path):
     assert _hidden(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_plot_stops_on_sigint(tmp_path):
     big = _file(tmp_path / "big.h5", n_trials=40)
     out = tmp_path / "figs"

@@ -6,6 +6,7 @@ import base64
 import re
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
@@ -47,6 +48,7 @@ def _file(path, n_trials=2):
     return path
 
 
+@pytest.mark.slow
 def test_plot_writes_pngs_and_html_page(tmp_path):
     f = _file(tmp_path / "rec.h5")
     out = tmp_path / "figs"
@@ -71,6 +73,7 @@ def test_plot_writes_pngs_and_html_page(tmp_path):
     assert "rec.h5 / t0 (object=wood): events per 20 ms" in html
 
 
+@pytest.mark.slow
 def test_plot_max_trials_limits_the_figures(tmp_path):
     f = _file(tmp_path / "rec.h5", n_trials=3)
     out = tmp_path / "figs"

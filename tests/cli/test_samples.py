@@ -7,6 +7,7 @@ import csv
 import shlex
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
@@ -51,6 +52,7 @@ def test_samples_writes_every_format(tmp_path):
         assert (folder / "reference.png").is_file() and (folder / "timestamps.csv").is_file()
 
 
+@pytest.mark.slow
 def test_samples_printed_commands_ingest_every_format(tmp_path):
     out = tmp_path / "s"
     result = _samples(out)
@@ -66,6 +68,7 @@ def test_samples_printed_commands_ingest_every_format(tmp_path):
         assert h5.is_file()
 
 
+@pytest.mark.slow
 def test_samples_same_seed_same_bytes(tmp_path):
     _samples(tmp_path / "a", "--seed", "7")
     _samples(tmp_path / "b", "--seed", "7")

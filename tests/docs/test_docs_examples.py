@@ -68,6 +68,7 @@ def _runnable_pages() -> list[Path]:
             if any(b.marker == "run" for b in doc_blocks.blocks_of(p))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page", _runnable_pages(),
                          ids=lambda p: str(p.relative_to(doc_blocks.REPO)))
 def test_runnable_examples_of_a_page_pass(page, tmp_path):

@@ -7,6 +7,7 @@ import re
 import sys
 from pathlib import Path
 
+import pytest
 import typer
 
 from tactile_cli.cli import app
@@ -34,6 +35,7 @@ def _leaf_commands(group, prefix: tuple[str, ...] = ()) -> set[str]:
     return names
 
 
+@pytest.mark.slow
 def test_command_reference_has_every_command_with_its_help():
     page = _reference_gen().command_reference()
     want = _leaf_commands(typer.main.get_command(app))

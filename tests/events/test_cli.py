@@ -85,6 +85,7 @@ def test_json_matches_the_library(recording):
     assert data["summary"]["segmentation_status"] == {"ok": 1, "failed": 1}
 
 
+@pytest.mark.slow
 def test_out_file_is_schema_valid_with_counts_labels_and_provenance(recording, tmp_path):
     path, truth = recording
     out = tmp_path / "counts.h5"

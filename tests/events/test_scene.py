@@ -40,6 +40,7 @@ def scene_file(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_segmentation_recovers_the_scene_regions(scene_file):
     # Measured: seed 3, group 1 (12 levels, level 12 saturated): all 12 "ok", bins as
     # annotated mean 99.3 %, lowest 98.1 %; |boundary error| at most 0.2 (press), 1.35

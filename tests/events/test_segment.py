@@ -31,6 +31,7 @@ def synthetic_results():
     return rows
 
 
+@pytest.mark.slow
 def test_segmentation_accuracy_on_synthetic_trials(synthetic_results):
     # Measured (seed 2024, 100 trials, 25 saturated): every trial "ok"; bins as in the
     # timeline: mean 99.27 %, lowest 97.2 %, 100 of 100 trials >= 97 %; |boundary error|

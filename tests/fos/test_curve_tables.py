@@ -61,6 +61,7 @@ def test_every_column_is_a_curve(tmp_path):
     assert fits["press/fz_0"]["n_points"] == 60 and fits["press/fz_2"]["units"] == "N"
 
 
+@pytest.mark.slow
 def test_a_folder_equals_its_files_one_by_one(tmp_path):
     folder = tmp_path / "curves"
     folder.mkdir()

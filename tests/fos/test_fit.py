@@ -386,6 +386,7 @@ def test_one_compilation_serves_every_model_and_batch_size():
     assert len(default) == 1  # pulse, step, ramp, both orders: one specialisation
 
 
+@pytest.mark.slow
 def test_the_traced_program_is_saved_and_reloaded(tmp_path, monkeypatch):
     """With the cache enabled, the solver is exported to the cache folder; a fresh process
     (here: an emptied program table) loads it, and a damaged file is traced anew."""

@@ -41,6 +41,7 @@ def _columns(path: Path, group: str) -> dict[str, np.ndarray]:
         return {k: g[k][()] for k in g if isinstance(g[k], h5py.Dataset)}
 
 
+@pytest.mark.slow
 def test_many_files_on_a_worker_equal_one_at_a_time_and_restart_skips(files, tmp_path):
     # the reference: each file fitted on its own, in this process
     single = []
@@ -89,6 +90,7 @@ def test_many_files_on_a_worker_equal_one_at_a_time_and_restart_skips(files, tmp
     assert "2 ok, 0 skipped (up to date), 0 failed" in res.stdout
 
 
+@pytest.mark.slow
 def test_many_files_refuse_single_file_options(files, tmp_path):
     res = runner.invoke(app, ["fit-fos", *map(str, files), "--csv", str(tmp_path / "t.csv")])
     assert res.exit_code == 2

@@ -64,6 +64,7 @@ def _read_csv(path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
+@pytest.mark.slow
 def test_json_and_the_fits_groups(fitted, source):
     path, out = fitted
     truth = source[1]
@@ -116,6 +117,7 @@ def test_table_summary_and_rerun_rules(fitted, tmp_path):
         assert "fos_slip" in h5["derived/fits"]  # the other region is kept
 
 
+@pytest.mark.slow
 def test_no_write_leaves_the_file_alone_and_writes_csv_and_plots(h5copy, tmp_path):
     before = _digest(h5copy)
     table, figures = tmp_path / "fits.csv", tmp_path / "figs"
@@ -297,6 +299,7 @@ def test_rss_is_derived_for_groups_written_before_it_was_stored(fitted, tmp_path
 
 
 # ----------------------------------------------------------------- the marker-event scene
+@pytest.mark.slow
 def test_scene_end_to_end(tmp_path):
     """12 force levels of the scene: simulate, ingest with annotations and labels, fit-fos,
     compare with trials.csv. Measured (seed 0, group 1): press alpha and tau within 5 % for

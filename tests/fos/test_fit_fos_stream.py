@@ -70,6 +70,7 @@ def test_mean_of_channels(source):
         assert min(taus) * 0.95 < f["tau_s"] < max(taus) * 1.05
 
 
+@pytest.mark.slow
 def test_every_annotation_by_default_and_table(source):
     path, _ = source
     out = _fit(path, "--channels", "fz_0")

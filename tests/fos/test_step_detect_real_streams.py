@@ -100,6 +100,7 @@ def test_repeated_timestamps_and_lost_samples_do_not_move_the_onset():
     assert search.dropped == 5 and abs(search.steps[0].start_s - truth["onset_s"]) <= DT
 
 
+@pytest.mark.slow
 def test_fit_fos_fits_every_curve_or_names_why_not(tmp_path):
     use_test_compilation_cache()
     path = tmp_path / "press.h5"
@@ -122,6 +123,7 @@ def test_fit_fos_fits_every_curve_or_names_why_not(tmp_path):
     assert all(f["region"] == "rise" for f in region["fits"])
 
 
+@pytest.mark.slow
 def test_a_press_that_creeps_back_over_seconds_is_not_first_order():
     # xela_press: a fast rise, a quick partial relaxation and a creep over seconds, in a
     # region of 27 s. The second-order fit started at the first-order solution (poles at

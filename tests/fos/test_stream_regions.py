@@ -89,6 +89,7 @@ def _fit(path, *args):
     return json.loads(result.stdout)
 
 
+@pytest.mark.slow
 def test_detected_regions_recover_the_steps(tmp_path):
     path = tmp_path / "bare.h5"
     truth = write_stream_file(path, n_trials=3, annotate=False, seed=11)
@@ -136,6 +137,7 @@ def _press_file(path, rows):
         w.commit()
 
 
+@pytest.mark.slow
 def test_relaxing_presses_are_flagged_not_first_order(tmp_path):
     path = tmp_path / "relax.h5"
     rows = [(2.0, 0.03, 0.3, 0.4, None), (1.5, 0.05, 0.2, 0.8, None),
@@ -157,6 +159,7 @@ def test_relaxing_presses_are_flagged_not_first_order(tmp_path):
     assert "relaxation (30 % over 0.4" in result.output
 
 
+@pytest.mark.slow
 def test_pulse_joins_a_press_and_its_release(tmp_path):
     path = tmp_path / "pulse.h5"
     rows = [(2.0, 0.05, 0.0, 1.0, 1.7), (1.2, 0.1, 0.0, 1.0, 2.1)]

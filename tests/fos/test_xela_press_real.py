@@ -7,6 +7,7 @@ bounds for axis 0 with size 868``). The per-trial figures are benchmarks/xela_pr
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
@@ -16,6 +17,7 @@ from tactile_cli.store.trials import TactileFile
 from ..conftest import REPO, shared_path
 
 
+@pytest.mark.slow
 def test_every_xela_press_trial_gives_its_press_or_a_reason(tmp_path):
     source = shared_path("xela_press")
     out = tmp_path / "press.h5"

@@ -134,6 +134,7 @@ def outcomes(tmp_path_factory) -> dict[str, dict]:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", [_param(c) for c in CASES])
 def test_damaged_input(case: fuzz_corpus.Case, outcomes: dict[str, dict]):
     result = runner.Outcome(**outcomes[case.id])

@@ -36,6 +36,7 @@ def test_classify(case, result, changed, left, expected):
     assert classify(case, result, input_changed=changed, leftover=left)[0] == expected
 
 
+@pytest.mark.slow
 def test_run_argv_captures_exit_code_and_one_line(tmp_path: Path):
     """In a fresh interpreter, as the fast subset runs (a fork of the pytest process would
     copy the threads of libraries that other tests loaded)."""

@@ -150,6 +150,7 @@ def test_cli_bad_csv_row_exits_2(tmp_path):
     assert f"tactile: error: {bad}, line 3: 3 fields, expected 2 (trial,area)" in result.output
 
 
+@pytest.mark.slow
 def test_cli_calibrate_and_plot(tmp_path):
     truth = _stream_file(tmp_path / "s.h5", list(range(1, 13)) * 2)
     assert len(truth) == 24

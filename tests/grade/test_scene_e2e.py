@@ -10,6 +10,7 @@ spread beyond +-5 %, alpha_1 jitter beyond 1.5 %, saturation r >= 0.9.
 
 from __future__ import annotations
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -39,6 +40,7 @@ def _scene(tmp_path, seed: int):
     return h5
 
 
+@pytest.mark.slow
 def test_calibrate_on_one_seed_and_grade_another(tmp_path):
     import json
 

@@ -46,6 +46,7 @@ def _info(path: Path, *args: str) -> dict:
     return json.loads(result.output)
 
 
+@pytest.mark.slow
 def test_event_csv_and_npy(samples, tmp_path):
     for name, fmt in (("events.csv", "events-csv"), ("events.npy", "events-npy")):
         data = _info(samples / name)

@@ -34,6 +34,7 @@ def _ingest(*args: str) -> tuple[int, str]:
     return res.exit_code, res.output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size_hw", [(240, 320), (480, 640)])
 def test_reference_first_keeps_frame_zero(tmp_path: Path, size_hw: tuple[int, int]) -> None:
     trial = tmp_path / "digit" / "press_01"
@@ -91,6 +92,7 @@ def test_labels_json_per_trial(tmp_path: Path) -> None:
         assert any(p.endswith("t1/labels.json") for p in sources)
 
 
+@pytest.mark.slow
 def test_labels_json_errors_name_the_file(tmp_path: Path) -> None:
     trial = tmp_path / "t1"
     _frames(trial, 2, size_hw=(240, 320))

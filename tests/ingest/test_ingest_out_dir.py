@@ -60,6 +60,7 @@ def _ingest(*args: str | Path):
     return runner.invoke(app, ["ingest", *map(str, args), *GEOMETRY, "--no-progress"])
 
 
+@pytest.mark.slow
 def test_out_dir_on_one_worker_equals_serial_and_restart_skips(recordings, tmp_path: Path):
     serial, dask = tmp_path / "serial", tmp_path / "dask"
     res = _ingest(*recordings, "--out-dir", serial, "--workers", "0")
@@ -82,6 +83,7 @@ def test_out_dir_on_one_worker_equals_serial_and_restart_skips(recordings, tmp_p
     assert "3 ok, 0 skipped" in res.stdout
 
 
+@pytest.mark.slow
 def test_a_damaged_input_fails_on_one_line_and_the_others_are_written(recordings,
                                                                        tmp_path: Path):
     bad = recordings[0].parent / "bad.csv"

@@ -450,6 +450,7 @@ def biotac(tmp_path_factory):
     return root, out, time.perf_counter() - t0
 
 
+@pytest.mark.slow
 def test_biotac_all_trials(biotac):
     root, out, seconds = biotac
     assert seconds > 0  # the time is benchmarks/ingest.py's to measure, not a test's

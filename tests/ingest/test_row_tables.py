@@ -104,6 +104,7 @@ def test_rows_are_samples_makes_one_trial(tmp_path):
     _nothing_written(tmp_path, tmp_path / "p2.h5")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", ["mlp", "fnn"])
 def test_train_one_vector_per_trial_grouped_by_object(tmp_path, family):
     pytest.importorskip("torch")

@@ -54,6 +54,7 @@ def runs(tmp_path_factory, action_file):
     return out
 
 
+@pytest.mark.slow
 def test_a_classic_run_folder_is_a_run_folder_with_onnx_and_no_pickle(runs):
     for family, run in runs.items():
         assert set(os.listdir(run)) == RUN_FILES, family
@@ -104,6 +105,7 @@ def test_the_stored_graph_gives_scikit_learns_probabilities(family, n_classes):
     np.testing.assert_array_equal(p.argmax(axis=1), est.predict_proba(z).argmax(axis=1))
 
 
+@pytest.mark.slow
 def test_export_gives_the_in_process_outputs_on_held_out_windows(runs, heldout_file,
                                                                  tmp_path):
     for family, run in runs.items():
@@ -147,6 +149,7 @@ def test_same_seed_same_model_whatever_the_thread_counts(action_file, runs, tmp_
     np.testing.assert_array_equal(outs[0], outs[1])
 
 
+@pytest.mark.slow
 def test_cross_validation_of_a_classic_family(action_file, tmp_path):
     cfg = tiny_config(model=MODELS["logistic"], data={"split": {"mode": "random",
                                                                 "val_fraction": 0.0}})

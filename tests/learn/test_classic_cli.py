@@ -44,6 +44,7 @@ def _ok(args):
     return result
 
 
+@pytest.mark.slow
 def test_cli_train_a_classic_family(grasp):
     root, data = grasp
     out = _ok(["train", str(root / "logistic.yaml"), "--data", str(data), "--out",
@@ -54,6 +55,7 @@ def test_cli_train_a_classic_family(grasp):
     assert info["split"]["trials"] == {"train": 36, "val": 12, "test": 12}
 
 
+@pytest.mark.slow  # uses the run test_cli_train_a_classic_family wrote
 def test_cli_evaluate_a_classic_family(grasp):
     root, data = grasp
     run = root / "run_logistic"
@@ -66,6 +68,7 @@ def test_cli_evaluate_a_classic_family(grasp):
     assert metrics["heads"]["slipped"]["accuracy_ci95"] is not None
 
 
+@pytest.mark.slow  # uses the run test_cli_train_a_classic_family wrote
 def test_cli_export_a_classic_family_and_check_it(grasp):
     root, data = grasp
     run, onnx_file = root / "run_logistic", root / "logistic.onnx"
@@ -82,6 +85,7 @@ def test_cli_export_a_classic_family_and_check_it(grasp):
     assert "the logistic family cannot be exported to torchscript" in result.output
 
 
+@pytest.mark.slow
 def test_cli_compare_puts_a_classic_family_beside_a_network(grasp):
     root, data = grasp
     _ok(["train", str(root / "mlp.yaml"), "--data", str(data), "--out", str(root / "run_mlp")])

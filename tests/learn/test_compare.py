@@ -219,6 +219,7 @@ def test_compare_refuses_different_data_and_ambiguous_evaluations(tmp_path):
 
 
 # -- real runs and the CLI -------------------------------------------------------------------
+@pytest.mark.slow
 def test_compare_real_runs_reads_evaluate_output(runs):
     cmp = compare(list(runs.values()))
     assert cmp.data_name == "heldout"
@@ -230,6 +231,7 @@ def test_compare_real_runs_reads_evaluate_output(runs):
     assert cmp.pareto and cmp.best.pareto  # the most accurate run is on the front
 
 
+@pytest.mark.slow
 def test_cli_compare_table_files_json_and_errors(runs, tmp_path):
     dirs = [str(d) for d in runs.values()]
     res = runner.invoke(app, ["compare", *dirs, "--out", str(tmp_path / "c"), "--margin", "1"])

@@ -42,6 +42,7 @@ def cv_run(tmp_path_factory, action_file):
     return out, res
 
 
+@pytest.mark.slow
 def test_cv_run_folder_holds_one_complete_run_per_fold(cv_run):
     out, res = cv_run
     info = json.loads((out / "run.json").read_text())
@@ -83,6 +84,7 @@ def test_cv_evaluation_pools_the_held_out_windows_of_every_fold(cv_run):
         evaluate(out, [out / "folds" / "fold_00" / "run.json"], latency=False, overwrite=True)
 
 
+@pytest.mark.slow
 def test_a_stopped_cv_run_resumes_and_gives_the_same_models(tmp_path, action_file, cv_run):
     full, _ = cv_run
     out = tmp_path / "run"
@@ -109,6 +111,7 @@ def test_a_stopped_cv_run_resumes_and_gives_the_same_models(tmp_path, action_fil
         train_cv(_cv_config(window=10), [action_file], tmp_path / "other", k=3, jobs=1)
 
 
+@pytest.mark.slow
 def test_folds_in_parallel_processes_match_the_serial_ones(tmp_path, action_file, cv_run):
     full, _ = cv_run
     res = train_cv(_cv_config(), [action_file], tmp_path / "par", k=3, jobs=2)
@@ -120,6 +123,7 @@ def test_folds_in_parallel_processes_match_the_serial_ones(tmp_path, action_file
         assert all(torch.equal(a[k], b[k]) for k in a)
 
 
+@pytest.mark.slow
 def test_cli_cv_and_split_from(tmp_path, action_file):
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(_cv_config().as_yaml())
@@ -179,6 +183,7 @@ def test_per_trial_votes_and_bootstrap_intervals():
     assert bootstrap_window_intervals(cms[:1])["accuracy_ci95"] is None
 
 
+@pytest.mark.slow
 def test_boundary_metric_only_for_labels_that_change_inside_a_trial(tmp_path, action_file):
     from tactile_cli.learn.train import train
 

@@ -38,6 +38,7 @@ def test_auto_is_cuda_only_where_torch_sees_a_gpu(monkeypatch):
     assert resolve_device("cpu") == torch.device("cpu")
 
 
+@pytest.mark.slow
 def test_the_cpu_gives_the_run_it_gave_before_and_records_the_device(action_file, tmp_path):
     cfg = tiny_config()
     default = train(cfg, [action_file], tmp_path / "default", command="tests")

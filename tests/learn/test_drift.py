@@ -108,6 +108,7 @@ def texture(tmp_path_factory):
     return root, first, later
 
 
+@pytest.mark.slow
 def test_cli_evaluate_reports_shift_and_interleaving(texture):
     root, first, later = texture
     stratified = root / "stratified"
@@ -154,6 +155,7 @@ def test_cli_evaluate_reports_shift_and_interleaving(texture):
     assert bad.stderr.startswith("tactile: error: --shift-threshold must be a number > 0")
 
 
+@pytest.mark.slow
 def test_blocked_cross_validation_reports_each_fold_against_its_own_training(texture):
     root, first, _ = texture
     raw = {**_CONFIG, "data": {**_CONFIG["data"], "split": {

@@ -39,6 +39,7 @@ def _metrics(folder: Path) -> dict:
     return json.loads((folder / "metrics.json").read_text())
 
 
+@pytest.mark.slow
 def test_each_file_on_a_worker_equals_one_evaluation_per_file(fnn_run, action_file,
                                                               heldout_file, tmp_path):
     """Also issue 30: the predictions (force levels at full precision) are the same bits

@@ -71,6 +71,7 @@ def _windows(run_dir, data_file):
     return run, ex.raw_windows(trials, run), mine
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(RUNS))
 def test_onnx_matches_the_package_outputs(name, trained, exported, heldout_file):
     run, raw, mine = _windows(trained[name], heldout_file)
@@ -120,6 +121,7 @@ def test_onnx_runs_in_a_fresh_process_without_tactile(trained, exported, heldout
         np.testing.assert_allclose(theirs[key], mine[key], rtol=0, atol=1e-5, err_msg=key)
 
 
+@pytest.mark.slow
 def test_torchscript_runs_in_a_fresh_process_without_tactile(trained, heldout_file, tmp_path):
     res = ex.export_run(trained["multihead"], tmp_path / "m.pt", format="torchscript",
                         command="tests")
@@ -210,6 +212,7 @@ def test_evaluate_with_exported_records_its_latency_and_difference(trained, expo
     assert not (trained["mlp"] / "eval" / "exp3").exists()
 
 
+@pytest.mark.slow
 def test_cli_export_evaluate_and_compare_show_the_exported_model(trained, heldout_file,
                                                                 tmp_path):
     runner = CliRunner()

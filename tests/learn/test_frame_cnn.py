@@ -126,6 +126,7 @@ def test_frames_smaller_than_the_configured_size_are_one_input_error(lifts):
         read_trials([lifts[0]], resolve_channels(cfg.data, [lifts[0]]))
 
 
+@pytest.mark.slow
 def test_a_per_trial_cnn_lstm_learns_evaluates_and_exports_equal_within_1e_5(lifts, tmp_path):
     cfg = parse_config(_raw(temporal="lstm", window=6, stride=6))
     result = train(cfg, [lifts[0]], tmp_path / "run", command="tests", device="cpu")
@@ -140,6 +141,7 @@ def test_a_per_trial_cnn_lstm_learns_evaluates_and_exports_equal_within_1e_5(lif
     assert metrics.latency is not None
 
 
+@pytest.mark.slow
 def test_a_per_frame_temporal_convolution_decides_at_every_frame(lifts, tmp_path):
     cfg = parse_config(_raw(temporal="conv", window=3, stride=1, pad="zero"))
     train(cfg, [lifts[0]], tmp_path / "run", command="tests")
@@ -150,6 +152,7 @@ def test_a_per_frame_temporal_convolution_decides_at_every_frame(lifts, tmp_path
     assert head.accuracy >= 0.9, head.accuracy
 
 
+@pytest.mark.slow
 def test_cross_validation_grouped_by_object_gives_two_folds(lifts, tmp_path):
     raw = _raw(epochs=4)
     raw["data"]["split"] = {"mode": "group", "by": "object", "val_fraction": 0.0}

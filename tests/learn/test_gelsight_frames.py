@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 from typer.testing import CliRunner
 
@@ -34,6 +35,7 @@ def _benchmark():
     return mod
 
 
+@pytest.mark.slow
 def test_two_real_lifts_read_as_frame_sequences(tmp_path):
     source = shared_path("gelsight_slip")
     rows = _benchmark().write_labels(source, tmp_path / "all_labels.csv")

@@ -70,6 +70,7 @@ def test_channels_that_are_not_whole_sensors_are_refused():
         build_model(_model(), window=1, n_channels=70, heads=HEADS)
 
 
+@pytest.mark.slow
 def test_a_layout_cnn_trains_evaluates_and_exports(tmp_path):
     data = tmp_path / "grasps.h5"
     write_grasp_file(data, n_grasps=40)

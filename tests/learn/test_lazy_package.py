@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from tactile_cli.learn.config import SplitConfig
 from tactile_cli.learn.data import TrialSeries
@@ -18,6 +19,7 @@ def _run(code: str) -> str:
                           text=True).stdout.strip()
 
 
+@pytest.mark.slow
 def test_importing_the_split_rules_does_not_import_torch():
     out = _run("import sys, tactile_cli.learn.splits, tactile_cli.taxel.pipeline; "
                "import tactile_cli.learn as L; L.assign_splits, L.TrainConfig; "
@@ -25,6 +27,7 @@ def test_importing_the_split_rules_does_not_import_torch():
     assert out == "False"
 
 
+@pytest.mark.slow
 def test_one_name_one_meaning_train_and_evaluate_are_modules():
     """``learn.train`` and ``learn.evaluate`` are the modules, whether or not they were
     imported first; the verbs are ``train_run`` and ``evaluate_run`` (issue 30, item 5)."""
@@ -69,6 +72,7 @@ def test_taxel_folds_are_the_cv_folds_of_tactile_train():
     assert stratified_fold_of(keys, slip.tolist(), 5, 5) == ours.tolist()
 
 
+@pytest.mark.slow
 def test_submodules_are_reachable_as_attributes():
     out = _run("import tactile_cli.learn as L; print(L.splits.__name__, L.runs.__name__, "
                "hasattr(L, 'no_such_name'))")

@@ -81,6 +81,7 @@ def test_export_never_replaces_the_runs_own_files(run):
     assert _tree(run) == before
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra", [[], ["--cv", "2"]])
 def test_train_refuses_an_output_that_is_or_holds_its_data(config, data, extra):
     before = _tree(data.parent)
@@ -156,6 +157,7 @@ def _interrupt_at_the_first_rename(monkeypatch) -> None:
     monkeypatch.setattr(atomic, "raise_if_requested", stop)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", [
     ["train", "{config}", "--data", "{data}", "--out", "{tmp}/out", "--no-progress",
      "--overwrite"],
@@ -183,6 +185,7 @@ def test_an_interrupted_overwrite_leaves_the_earlier_output_byte_identical(
     assert _tree(tmp_path) == before
 
 
+@pytest.mark.slow
 def test_train_cv_interrupted_with_overwrite_keeps_the_earlier_run_and_resumes(
         config, data, tmp_path, monkeypatch):
     from tactile_cli.learn import cv

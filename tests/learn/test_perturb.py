@@ -146,6 +146,7 @@ def test_breaking_point_walks_from_mild_to_severe_in_each_direction():
 
 
 # -- a real run ------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_perturb_evaluate_finds_breaking_points_and_matches_evaluate(runs, heldout_file):
     run = runs["lstm"]
     before = sha256_of(heldout_file)
@@ -201,6 +202,7 @@ def test_perturb_input_errors(runs, heldout_file):
         perturb_evaluate(run, [heldout_file.with_name("none.h5")], write=False)
 
 
+@pytest.mark.slow
 def test_cli_perturb(runs, heldout_file, tmp_path, monkeypatch):
     dirs = [str(runs["lstm"]), str(runs["mlp"])]
     # provenance records sys.argv; under CliRunner that is the test runner's, so give the

@@ -68,6 +68,7 @@ def _png(path, text: str) -> None:
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_report_is_self_contained_and_holds_every_section(runs, heldout_file, tmp_path):
     perturb_evaluate(runs["lstm"], [heldout_file], ["noise", "lowpass"],
                      {"noise": [30, -20], "lowpass": [0.25, 0.01]}, name="rep")
@@ -128,6 +129,7 @@ def test_report_errors_name_the_missing_input(runs, tmp_path):
     assert not (tmp_path / "r").exists()  # nothing written before the checks
 
 
+@pytest.mark.slow
 def test_cli_report_prints_the_page_path(runs, heldout_file, action_file, tmp_path):
     out = tmp_path / "rep"
     # `--data a.h5 b.h5` (a shell glob): b.h5 lands among the run arguments and, being a

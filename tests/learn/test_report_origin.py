@@ -71,6 +71,7 @@ def _labelled_file(path, labels: dict, *, source=None):
     return path
 
 
+@pytest.mark.slow
 def test_recorded_results_come_first_with_their_tags_and_cv(runs, tmp_path):
     base = json.loads((runs["lstm"] / "eval" / "heldout" / "metrics.json").read_text())
     cv = _cv_metrics(base)
@@ -121,6 +122,7 @@ def test_recorded_results_come_first_with_their_tags_and_cv(runs, tmp_path):
     assert [o["evaluation"] for o in record["origins"]][:2] == ["biotac", "biotac"]
 
 
+@pytest.mark.slow
 def test_origin_is_read_from_the_data_when_metrics_lack_it(runs, tmp_path):
     base = json.loads((runs["lstm"] / "eval" / "heldout" / "metrics.json").read_text())
     scene = _labelled_file(tmp_path / "scene_test.h5",
@@ -144,6 +146,7 @@ def test_origin_is_read_from_the_data_when_metrics_lack_it(runs, tmp_path):
     assert by_name["heldout"]["trained_on"]["kind"] == "unknown"  # no labels on the fixture
 
 
+@pytest.mark.slow
 def test_training_data_made_from_the_evaluated_file_is_not_independent(runs, tmp_path):
     base = json.loads((runs["lstm"] / "eval" / "heldout" / "metrics.json").read_text())
     scene = _labelled_file(tmp_path / "scene.h5", {"origin": "simulated"})
@@ -164,6 +167,7 @@ def test_training_data_made_from_the_evaluated_file_is_not_independent(runs, tmp
     assert by_name["scene"]["trained_on"]["kind"] == "synthetic"
 
 
+@pytest.mark.slow
 def test_damaged_new_fields_do_not_break_the_page(runs, tmp_path):
     base = json.loads((runs["lstm"] / "eval" / "heldout" / "metrics.json").read_text())
     m = dict(base, cv={"k": 5, "folds": "x"}, warnings="not a list", origin={

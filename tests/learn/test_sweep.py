@@ -116,6 +116,7 @@ def _table(out: Path) -> dict[str, dict[str, str]]:
         return {r["run"]: r for r in csv.DictReader(f)}
 
 
+@pytest.mark.slow
 def test_sweep_on_a_local_cluster_then_restart_on_a_given_scheduler(vibro, tmp_path: Path,
                                                                      monkeypatch):
     from distributed import LocalCluster
@@ -184,6 +185,7 @@ def _long_or_short(spec: tuple[int, str]) -> int:
     return _slow_double(*spec)
 
 
+@pytest.mark.slow
 def test_map_tasks_reports_failures_and_stops_on_interrupt(tmp_path: Path):
     results = list(map_tasks(_slow_double, [1, 2, 3], workers=0))
     assert [(r.ok, r.value, r.error) for r in results] == [
@@ -237,6 +239,7 @@ def _one_run_sweep(tmp_path: Path, vibro, **changes) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_an_interrupted_overwrite_keeps_the_earlier_sweep_and_a_restart_resumes(
         vibro, tmp_path: Path, monkeypatch):
     """Issue 33, item 3: the new sweep is built beside the old one, which is replaced only
@@ -283,6 +286,7 @@ def test_a_sweep_whose_every_run_failed_exits_2_with_its_table(vibro, tmp_path: 
     assert "'Q_x' is not a channel" in (tmp_path / "sw" / "table.md").read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["a: " + "[" * 50_000 + "]" * 50_000 + "\n",
                                   "".join(f"{' ' * i}k{i}:\n" for i in range(1500))])
 def test_a_sweep_file_nested_too_deep_is_one_line(tmp_path: Path, text: str):

@@ -66,6 +66,7 @@ def test_weights_load_with_weights_only_and_give_the_trained_model(tiny_run):
         torch.testing.assert_close(value, state[key], rtol=0, atol=0)
 
 
+@pytest.mark.slow
 def test_same_seed_gives_identical_weights_and_another_seed_does_not(tmp_path, action_file):
     cfg = tiny_config(optim={"epochs": 1})
     train(cfg, [action_file], tmp_path / "a")
@@ -162,6 +163,7 @@ def test_existing_run_folder_is_an_error_unless_overwrite(tiny_run, action_file)
         train(tiny_config(), [action_file], out)
 
 
+@pytest.mark.slow
 def test_cli_train_and_evaluate(tmp_path, action_file, heldout_file):
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(tiny_config(optim={"epochs": 2}).as_yaml())

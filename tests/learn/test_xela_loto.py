@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import shared_path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -26,6 +28,7 @@ def test_wilson_interval_known_value() -> None:
     assert abs(lo - 0.2366) < 1e-4 and abs(hi - 0.7634) < 1e-4
 
 
+@pytest.mark.slow
 def test_loto_quick_run_writes_pooled_metrics(tmp_path: Path) -> None:
     source = shared_path("xela_slip")
     mod = _module()

@@ -160,6 +160,7 @@ def test_centroids_command_errors(sparse_file, tmp_path):
         assert list(h5["trials"]) == ["a"]
 
 
+@pytest.mark.slow
 def test_spatial_lstm_trains_on_synth_and_evaluates_on_a_scene(tmp_path):
     """The chain of configs/train_lstm_spatial.yaml, shortened (60 synth trials, 6 epochs):
     the synth and the scene streams have the same channels, a model trained only on the

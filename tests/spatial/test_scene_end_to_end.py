@@ -34,6 +34,7 @@ def scene(tmp_path_factory) -> tuple[Path, Path]:
     return out, h5
 
 
+@pytest.mark.slow
 def test_slip_speeds_within_10_percent_of_the_truth(scene):
     out, h5 = scene
     with open(out / "trials.csv", newline="") as f:

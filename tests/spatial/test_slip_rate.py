@@ -134,6 +134,7 @@ def test_labels_give_the_region_when_annotations_are_missing(tmp_path):
 
 
 # -- commands ---------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_slip_rate_command_json_table_and_plot(strip_file, rois_yaml, tmp_path):
     out = runner.invoke(app, ["slip-rate", str(strip_file), "--rois", str(rois_yaml), "--json",
                               "--plot", str(tmp_path / "plots")])
@@ -184,6 +185,7 @@ def test_slip_rate_bad_input_is_one_line_exit_2(strip_file, tmp_path, args, mess
     assert result.stderr.strip() == f"tactile: error: {message.format(**subst)}"
 
 
+@pytest.mark.slow
 def test_frames_command_writes_pngs_sheet_and_provenance(strip_file, rois_yaml, tmp_path):
     out = tmp_path / "frames"
     result = runner.invoke(app, ["frames", str(strip_file), "--out", str(out), "-t", "paper",

@@ -93,6 +93,7 @@ def test_stream_options_are_checked(recording, tmp_path):
         assert not Path(out).exists()
 
 
+@pytest.mark.slow
 def test_many_files_on_a_worker_equal_one_file_runs(recording, tmp_path):
     import os
     import shutil
@@ -133,7 +134,8 @@ def test_out_or_out_dir(recording, tmp_path):
     assert res.exit_code == 2 and "give --out (one input) or --out-dir" in res.stderr
     res = runner.invoke(app, ["features", "spectral", str(recording), "--out-dir",
                               str(tmp_path / "f")])
-    assert res.exit_code == 2 and "--out-dir goes with --stream (the taxel-slip layout" in res.stderr
+    assert res.exit_code == 2
+    assert "--out-dir goes with --stream (the taxel-slip layout" in res.stderr
     res = runner.invoke(app, ["features", "spectral", str(recording), str(recording),
                               "--out", str(tmp_path / "o.h5"), "--stream", "accel"])
     assert res.exit_code == 2 and "--out takes one input" in res.stderr

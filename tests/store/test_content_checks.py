@@ -183,6 +183,7 @@ def test_validate_reads_every_chunk(tmp_path):
     assert hits and "cannot be read" in hits[0].message and "\n" not in hits[0].message
 
 
+@pytest.mark.slow
 def test_validate_never_raises_on_flipped_bytes(good, tmp_path):
     """Byte flips anywhere (compressed chunks, B-tree and heap metadata) give a report,
     with every violation on one line; the reader gives one InputError line or succeeds."""

@@ -60,6 +60,7 @@ def test_config_errors_name_the_key_and_line(tmp_path):
         load_synth_config(bad)
 
 
+@pytest.mark.slow
 def test_same_seed_same_file_and_the_layout(tmp_path):
     a, b, c = tmp_path / "a.h5", tmp_path / "b.h5", tmp_path / "c.h5"
     for out, seed in ((a, 0), (b, 0), (c, 1)):

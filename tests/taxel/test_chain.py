@@ -55,6 +55,7 @@ def test_trials_are_fixed_by_the_seed():
     assert a.taxels[0].shape == (round(2.5 * 300), 12)
 
 
+@pytest.mark.slow
 def test_file_layout_labels_and_delays(taxel_file):
     with TactileFile(taxel_file) as tf:
         trial = tf.trial("biotac_world_000")
@@ -112,6 +113,7 @@ def test_folds_are_stratified_and_independent_of_order():
     np.testing.assert_array_equal(rev, folds[::-1])
 
 
+@pytest.mark.slow
 def test_features_separate_the_slip_types(taxel_file):
     with TactileFile(taxel_file) as tf:
         pt = read_preset_trials(tf, "pvdf")
@@ -124,6 +126,7 @@ def test_features_separate_the_slip_types(taxel_file):
     assert pf.decided.all()
 
 
+@pytest.mark.slow
 def test_slip_interface_nested_accuracy(taxel_file):
     cfg = FeatureConfig(folds=5, inner_folds=3)
     result = slip_interface(taxel_file, cfg)
@@ -139,6 +142,7 @@ def test_slip_interface_nested_accuracy(taxel_file):
     assert np.mean([s.full_spectrum for s in table.values()]) > 0.8
 
 
+@pytest.mark.slow
 def test_feature_stream_is_readable(taxel_file, tmp_path):
     out = tmp_path / "features.h5"
     res = write_taxel_features(taxel_file, out, FeatureConfig())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from typer.testing import CliRunner
 
 from tactile_cli.cli import app
@@ -19,6 +20,7 @@ def test_help_of_every_taxel_command():
         assert "Usage" in res.output
 
 
+@pytest.mark.slow
 def test_simulate_then_classify_then_features(tmp_path):
     scene = tmp_path / "scene.h5"
     res = runner.invoke(app, ["simulate", "taxel-slip", "--out", str(scene), "--preset",
@@ -56,6 +58,7 @@ def test_bad_inputs_are_one_line_errors(tmp_path, taxel_file):
     assert len(res.output.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_reversed_bands_and_unknown_slip_labels_are_one_line_errors(tmp_path):
     """Found by the damaged-input corpus: a band [300, 10] was accepted, and `features
     spectral` met a slip label other than hand or world as a ValueError traceback."""

@@ -45,6 +45,7 @@ def test_vibro_model_interrupted_overwrite_keeps_the_earlier_figure(tmp_path, mo
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.png"]
 
 
+@pytest.mark.slow
 def test_detect_contact_interrupted_overwrite_keeps_the_earlier_figure(scene, tmp_path,
                                                                        monkeypatch):
     from tactile_cli.vibro import plots

@@ -48,6 +48,7 @@ def test_scene_writes_both_rates_truth_and_origin(scene):
     assert origin["kind"] == "simulated" and origin["datasets"] == ["vibrotouch seed 7"]
 
 
+@pytest.mark.slow
 def test_same_seed_same_samples(scene, tmp_path):
     path, _ = scene
     cfg = tmp_path / "s.yaml"
@@ -108,6 +109,7 @@ def test_band_finder_names_a_band_that_separates_contact(scene):
     assert report.totals()["vibration_detected"] == 2
 
 
+@pytest.mark.slow
 def test_detect_contact_command_json_plot_and_follow(scene, tmp_path):
     path, _ = scene
     png = tmp_path / "fig.png"

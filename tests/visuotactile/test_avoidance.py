@@ -51,6 +51,7 @@ def scene(tmp_path_factory):
     return out, h5, json.loads((out / "scene.json").read_text())
 
 
+@pytest.mark.slow
 def test_layout_labels_and_truth(scene):
     out, _, meta = scene
     trial = meta["trials"][0]
@@ -123,6 +124,7 @@ def test_replay_of_the_written_frames_matches_the_live_monitor(scene):
     assert got["totals"]["detection_rate"] == 1.0
 
 
+@pytest.mark.slow
 def test_monitor_reads_the_scene_folder_as_a_stream_of_frames(scene):
     out, h5, _ = scene
     from_file = json.loads(runner.invoke(app, ["monitor", str(h5), "--json"]).output)
@@ -138,6 +140,7 @@ def test_monitor_reads_the_scene_folder_as_a_stream_of_frames(scene):
     assert alone["threshold"] == from_file["trials"][0]["threshold"]
 
 
+@pytest.mark.slow
 def test_monitor_text_output_plot_and_motion_model(scene, tmp_path):
     _, h5, _ = scene
     res = runner.invoke(app, ["monitor", str(h5), "--plot", str(tmp_path / "plots"),
@@ -193,6 +196,7 @@ def test_monitor_missing_file(tmp_path):
     assert res.exit_code == 2 and "file not found" in res.output
 
 
+@pytest.mark.slow
 def test_simulate_same_seed_same_bytes_and_refuses_existing(tmp_path):
     cfg = small_config(interferences=1, repeat_after_s=None)
     a = simulate_digit_avoidance(cfg, tmp_path / "a", seed=2)
@@ -228,6 +232,7 @@ def test_help():
         assert res.exit_code == 0 and "Usage" in res.output
 
 
+@pytest.mark.slow
 def test_monitor_height_source_with_a_trained_normal_model(tmp_path_factory, tmp_path):
     """--source height: frames through a (small) trained normal network and the Poisson
     solve; the slip trials' slides are caught, the still trials give no false slip."""

@@ -88,6 +88,7 @@ def test_sphere_normals_follow_eqs_5_to_8() -> None:
     assert np.allclose(np.linalg.norm(n, axis=-1), 1, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_pixel_table(files: dict) -> None:
     summary = files["summary"]
     assert summary["n_presses"] == 10 and summary["n_failed"] == 0
@@ -133,6 +134,7 @@ def test_missing_scale_is_one_line(files: dict, tmp_path: Path) -> None:
     assert len(res.output.strip().splitlines()) == 1 and not (tmp_path / "p.h5").exists()
 
 
+@pytest.mark.slow
 def test_mlp_beats_the_flat_predictor_on_held_out_presses(files: dict) -> None:
     from tactile_cli.visuotactile.normals import NormalModel
 

@@ -127,6 +127,7 @@ def test_texture_on_grid_equals_direct_evaluation() -> None:
     assert np.allclose(tex.on_grid(optics, (12.5, 9.0), 25.0), direct, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_scene_layout_labels_and_truth(scene: Path) -> None:
     presses = sorted(p.name for p in (scene / "calibration").iterdir())
     assert presses == ["ball_00", "ball_01", "ball_02"]
@@ -168,6 +169,7 @@ def test_scene_layout_labels_and_truth(scene: Path) -> None:
     assert meta["seed"] == 3 and meta["optics"]["px_per_mm"] == 16.0
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes_other_seed_other_lighting(scene: Path, tmp_path: Path) -> None:
     cfg = small_config().with_overrides(per_object=1, objects=["hex_key_small"])
     a = simulate_digit_press(cfg, tmp_path / "a", seed=3)

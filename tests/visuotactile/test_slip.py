@@ -112,6 +112,7 @@ def test_height_source_needs_a_model(frames_file: Path) -> None:
         slip_signal_file(frames_file, source="height")
 
 
+@pytest.mark.slow
 def test_cli_json_plot_and_errors(frames_file: Path, tmp_path: Path) -> None:
     res = runner.invoke(app, ["slip-signal", str(frames_file), "--source", "intensity",
                               "--mesh", "16x12", "--json", "--plot", str(tmp_path / "fig")])

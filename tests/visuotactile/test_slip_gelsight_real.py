@@ -8,6 +8,7 @@ import csv
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tactile_cli.ingest import ingest
 from tactile_cli.visuotactile.slip import slip_signal_file
@@ -18,6 +19,7 @@ LIFTS = (("object001", "067_00_mm", False), ("object001", "067_30_mm", True),
          ("object002", "065_00_mm", False), ("object002", "065_50_mm", True))
 
 
+@pytest.mark.slow
 def test_real_lifts_static_start_and_scale_auto(tmp_path: Path) -> None:
     root = shared_path("gelsight_slip")
     for obj, lift, slipped in LIFTS:  # the labels are the .dat files' own

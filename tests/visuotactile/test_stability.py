@@ -64,6 +64,7 @@ def tiny():
     return run_stability(cfg, [101], levels=levels), cfg, levels
 
 
+@pytest.mark.slow
 def test_tiny_run_detects_at_baseline_and_breaks_under_heavy_noise(tiny):
     result, cfg, levels = tiny
     assert result.n_trials == 3 and result.seeds == [101]
@@ -80,6 +81,7 @@ def test_tiny_run_detects_at_baseline_and_breaks_under_heavy_noise(tiny):
     assert [r.as_dict() for r in again.results] == [r.as_dict() for r in result.results]
 
 
+@pytest.mark.slow
 def test_benchmark_quick_writes_png_and_json(tmp_path):
     out = tmp_path / "stab.png"
     res = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "visuotactile_stability.py"),
