@@ -160,8 +160,8 @@ def ingest_command(
         bool,
         typer.Option(
             "--sort-stamps",
-            help="Robot recordings: sort the samples of a stream whose stamps go back (without "
-            "it such a stream is refused, with the count)." + _formats("sort_stamps"),
+            help="Robot recordings: sort the samples and frames of a stream whose stamps go "
+            "back (without it such a stream is refused, with the count)." + _formats("sort_stamps"),
         ),
     ] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
