@@ -19,6 +19,12 @@ alone (target >= 0.70); ``peak_rss_mb`` is the ingest child's ``VmHWM`` (target:
 1 GB for a 2 GB recording, i.e. memory that does not grow with the recording). The recording
 sits in the page cache (just written), as for both measurements.
 
+Video (``--video-s``, default 30 s; 0 skips it): the rig's camera as an MP4
+(``write_press_video``: MPEG-4 part 2, 30 fps, the same frames size), measured the same way:
+PyAV alone demuxing, decoding and converting every frame to RGB (``to_ndarray("rgb24")``,
+what any RGB ingest needs), against ``tactile ingest`` of the video; ``video_ratio`` =
+ingest / PyAV alone, in frames per second.
+
     .venv/bin/python benchmarks/rosbag_ingest.py --mb 1024 --container ros1 --json
 """
 
@@ -51,7 +57,27 @@ def _peak_rss_mb() -> float:
 
 
 def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]:
-    if kind == "reader":
+    n = 0
+    if kind == "video_reader":
+        import av
+
+        start = time.perf_counter()
+        with av.open(src) as container:
+            for frame in container.decode(container.streams.video[0]):
+                frame.to_ndarray(format="rgb24")
+                n += 1
+        seconds = time.perf_counter() - start
+    elif kind == "video_ingest":
+        import av  # noqa: F401  (imports off the clock)
+
+        import tactile_cli.ingest.video  # noqa: F401
+        from tactile_cli.ingest import ingest
+        from tactile_cli.store.writer import Compression
+
+        start = time.perf_counter()
+        ingest([src], out, overwrite=True, command="benchmark", compression=Compression(level))
+        seconds = time.perf_counter() - start
+    elif kind == "reader":
         from tactile_cli.ingest.robot_recording import RobotRecording
 
         start = time.perf_counter()
@@ -74,7 +100,6 @@ def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]
         ingest([src], out, options={"mapping": MAPPING}, overwrite=True, command="benchmark",
                compression=Compression(level))
         seconds = time.perf_counter() - start
-        n = 0
     return {"seconds": seconds, "messages": n, "peak_rss_mb": _peak_rss_mb()}
 
 
@@ -90,6 +115,26 @@ def _size(path: Path) -> int:
             else path.stat().st_size)
 
 
+def _video(root: Path, args: argparse.Namespace, level: int | None) -> dict[str, float]:
+    """The video comparison: PyAV alone against ``tactile ingest`` of the same MP4."""
+    from tactile_cli.samples import robot
+
+    src = robot.write_press_video(root / "press.mp4", seconds=args.video_s, image_hz=IMAGE_HZ,
+                                  size_hw=IMAGE_HW, array_hz=100.0, seed=0)
+    reader = [_run_child("video_reader", src, root / "x.h5", level) for _ in range(args.repeat)]
+    tactile = [_run_child("video_ingest", src, root / "v.h5", level)
+               for _ in range(args.repeat)]
+    frames = int(reader[0]["messages"])
+    reader_s = statistics.median(r["seconds"] for r in reader)
+    ingest_s = statistics.median(r["seconds"] for r in tactile)
+    return {"video_mb": round(src.stat().st_size / 1e6, 1), "video_frames": frames,
+            "video_reader_alone_s": round(reader_s, 2), "video_ingest_s": round(ingest_s, 2),
+            "video_reader_alone_fps": round(frames / reader_s, 1),
+            "video_ingest_fps": round(frames / ingest_s, 1),
+            "video_ratio": round(reader_s / ingest_s, 3),
+            "video_peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--mb", type=float, default=256.0, help="recording size in MB")
@@ -98,6 +143,8 @@ def main() -> None:
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--compression", type=int, default=1,
                         help="gzip level of the ingest (-1: none; 1 is the CLI default)")
+    parser.add_argument("--video-s", type=float, default=30.0,
+                        help="seconds of the MP4 of the video comparison (0: skip it)")
     parser.add_argument("--child", nargs=4, metavar=("KIND", "SRC", "OUT", "LEVEL"),
                         help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -122,6 +169,8 @@ def main() -> None:
         reader = [_run_child("reader", src, root / "x.h5", level) for _ in range(args.repeat)]
         tactile = [_run_child("ingest", src, root / "o.h5", level) for _ in range(args.repeat)]
         out_mb = (root / "o.h5").stat().st_size / 1e6
+        (root / "o.h5").unlink()
+        video = _video(root, args, level) if args.video_s > 0 else {}
     reader_s = statistics.median(r["seconds"] for r in reader)
     ingest_s = statistics.median(r["seconds"] for r in tactile)
     result = {
@@ -135,6 +184,7 @@ def main() -> None:
         "peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1),
         "reader_peak_rss_mb": round(max(r["peak_rss_mb"] for r in reader), 1),
         "output_mb": round(out_mb, 1), "compression": args.compression, "repeat": args.repeat,
+        **video,
     }
     if args.json:
         print(json.dumps(result, indent=2))

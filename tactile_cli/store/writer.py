@@ -566,6 +566,10 @@ class FrameAppender:
         """Write the frames still being deflated and set the trial duration (as for
         signals: from min(0, first time) to the last time); returns the frame count."""
         self._write_ready(0)
+        # append checked shape, dtype and time order (finite, non-decreasing) of every frame
+        # before it was written, and the deflated chunks come straight from zlib, so the
+        # commit need not inflate the frames again to validate them (as for events)
+        self.trial.store.verified.update(f"{self.group.name}/{c}" for c in ("images", "t_s"))
         if self.t_first is not None and self.t_last is not None:
             self.trial._extend_duration(self.t_last - min(0.0, self.t_first))
         return self.n
