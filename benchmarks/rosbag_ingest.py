@@ -16,8 +16,11 @@ child processes (imports off the clock):
 
 Rates are recording bytes / wall seconds (MB = 10^6 bytes); ``ratio`` = ingest / reader
 alone (target >= 0.70); ``peak_rss_mb`` is the ingest child's ``VmHWM`` (target: well under
-1 GB for a 2 GB recording, i.e. memory that does not grow with the recording). The recording
-sits in the page cache (just written), as for both measurements.
+1 GB for a 2 GB recording, i.e. memory that does not grow with the recording);
+``reader_cpu_s``/``ingest_cpu_s`` are each child's user + system CPU seconds over all its
+threads (imports included), and ``load_avg_1min`` the machine's 1-minute load average
+before the reader and after the ingest: on a shared machine the ratio moves with the load.
+The recording sits in the page cache (just written), as for both measurements.
 
 Video (``--video-s``, default 30 s; 0 skips it): the rig's camera as an MP4
 (``write_press_video``: MPEG-4 part 2, 30 fps, the same frames size), measured the same way:
@@ -32,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -100,7 +104,11 @@ def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]
         ingest([src], out, options={"mapping": MAPPING}, overwrite=True, command="benchmark",
                compression=Compression(level))
         seconds = time.perf_counter() - start
-    return {"seconds": seconds, "messages": n, "peak_rss_mb": _peak_rss_mb()}
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_SELF)  # every thread's, imports included
+    return {"seconds": seconds, "messages": n, "peak_rss_mb": _peak_rss_mb(),
+            "cpu_s": usage.ru_utime + usage.ru_stime}
 
 
 def _run_child(kind: str, src: Path, out: Path, level: int | None) -> dict[str, float]:
@@ -166,8 +174,10 @@ def main() -> None:
         write_s = time.perf_counter() - t0
         size = _size(src)
         level = None if args.compression < 0 else args.compression
+        load = [os.getloadavg()[0]]
         reader = [_run_child("reader", src, root / "x.h5", level) for _ in range(args.repeat)]
         tactile = [_run_child("ingest", src, root / "o.h5", level) for _ in range(args.repeat)]
+        load.append(os.getloadavg()[0])
         out_mb = (root / "o.h5").stat().st_size / 1e6
         (root / "o.h5").unlink()
         video = _video(root, args, level) if args.video_s > 0 else {}
@@ -183,6 +193,9 @@ def main() -> None:
         "ratio": round(reader_s / ingest_s, 3),
         "peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1),
         "reader_peak_rss_mb": round(max(r["peak_rss_mb"] for r in reader), 1),
+        "reader_cpu_s": round(statistics.median(r["cpu_s"] for r in reader), 1),
+        "ingest_cpu_s": round(statistics.median(r["cpu_s"] for r in tactile), 1),
+        "load_avg_1min": [round(x, 2) for x in load],
         "output_mb": round(out_mb, 1), "compression": args.compression, "repeat": args.repeat,
         **video,
     }

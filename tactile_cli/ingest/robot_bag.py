@@ -55,6 +55,15 @@ from ..progress import Progress
 from ..store.provenance import sha256_of
 from ..store.writer import StoreWriter
 from .contract import FormatOptions, IngestFormat, RecordingSummary, StreamSummary, TrialSummary
+from .robot_messages import (
+    check_path,
+    compressed_rgb,
+    event_columns,
+    frame_id,
+    header_stamp_ns,
+    image_rgb,
+    row_reader,
+)
 from .robot_recording import (
     BAG_SUFFIX,
     MCAP_SUFFIX,
@@ -144,8 +153,6 @@ def check_topics(rec: RobotRecording, mapping: TopicMapping, mapping_path: Path)
         if ref is not None:
             _check_reference_topic(rec, stream, ref, mapping_path)
         if stream.fields is not None:
-            from .robot_messages import check_path
-
             for path in stream.fields:
                 check_path(rec, info.msgtype, path, stream.topic)
 
@@ -324,8 +331,6 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
 
 
 def _stamp(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping) -> int:
-    from .robot_messages import frame_id, header_stamp_ns
-
     header = header_stamp_ns(msg)
     if st.use_header is None:
         wanted = (st.spec.time or mapping.time) == "header"
@@ -358,8 +363,6 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
         _take_events(st, msg, k, rec, trials, writer)
     else:
         if st.rows is None:
-            from .robot_messages import row_reader
-
             st.rows = row_reader(rec, spec.topic, st.msgtype, msg, spec.fields)
             _check_names(st, rec)
         row = st.rows.read(msg)
@@ -391,8 +394,6 @@ def _check_names(st: _Stream, rec: RobotRecording) -> None:
 
 def _take_frame(st: _Stream, msg: Any, t_ns: int, k: int, index: int, rec: RobotRecording,
                 trials: list[_Trial], options: RobotOptions) -> None:
-    from .robot_messages import compressed_rgb, image_rgb
-
     if short_type(st.msgtype) == "sensor_msgs/CompressedImage":
         rgb = compressed_rgb(msg, st.spec.topic, index, rec)
     else:
@@ -427,8 +428,6 @@ def _take_frame(st: _Stream, msg: Any, t_ns: int, k: int, index: int, rec: Robot
 
 def _topic_reference(st: _Stream, state: dict[str, Any], rec: RobotRecording) -> np.ndarray:
     """The (height, width, 3) uint8 reference frame a trial takes from the reference topic."""
-    from .robot_messages import compressed_rgb, image_rgb
-
     topic = st.spec.reference_topic
     assert topic is not None and state["ref"] is not None
     index, raw = state["ref"]
@@ -478,8 +477,6 @@ def _write_frames(st: _Stream, state: dict[str, Any], trial: _Trial, rec: RobotR
 
 def _take_events(st: _Stream, msg: Any, k: int, rec: RobotRecording, trials: list[_Trial],
                  writer: StoreWriter) -> None:
-    from .robot_messages import event_columns
-
     if st.sensor is None:
         width = st.spec.width_px or int(msg.width)
         height = st.spec.height_px or int(msg.height)
