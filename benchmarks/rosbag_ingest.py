@@ -11,8 +11,9 @@ child processes (imports off the clock):
   and deserialising it (rosbags ``AnyReader`` + its typestore for bags; ``mcap``'s reader +
   the same typestore for MCAP): the floor of any ingest of these messages;
 - **tactile ingest**: ``tactile_cli.ingest.ingest`` end to end with
-  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames
-  and signals, SHA-256 of the recording, schema validation, atomic rename).
+  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames,
+  deflated in the store's thread pool, and signals, SHA-256 of the recording, schema
+  validation, atomic rename).
 
 Rates are recording bytes / wall seconds (MB = 10^6 bytes); ``ratio`` = ingest / reader
 alone (target >= 0.70); ``peak_rss_mb`` is the ingest child's ``VmHWM`` (target: well under
