@@ -25,7 +25,11 @@ Cost: parameters (stored numbers) and batch-1 latency of fold 0's model on this 
         --out /tmp/grasps.h5
     .venv/bin/python benchmarks/grasp_outcome.py --data /tmp/grasps.h5 [--json]
     .venv/bin/python benchmarks/grasp_outcome.py --data /tmp/grasps.h5 --only logistic,svm_c3
+    .venv/bin/python benchmarks/grasp_outcome.py --data /tmp/grasps.h5 --only svm_c1,svm_c10 \
+        --merge benchmarks/figures/grasp_outcome.json    # add candidates to a record
 
+``--merge RECORD`` keeps the rows of an earlier record of this script on the same file
+(same SHA-256) for the candidates not run now, so the summary and the chart cover both.
 Writes benchmarks/figures/grasp_outcome.json and grasp_outcome.png (stratified macro F1
 against batch-1 latency: the chart of ``tactile compare``).
 """
@@ -139,6 +143,18 @@ def run_one(name: str, raw: dict[str, Any], mode: str, data: Path, root: Path
     }
 
 
+def merged_rows(path: Path, rows: list[dict[str, Any]], data_sha256: str
+                ) -> list[dict[str, Any]]:
+    """The rows of the earlier record at ``path`` for candidates not in ``rows``, then
+    ``rows``; the record must be of the same file (SHA-256), or the figures would mix data."""
+    earlier = json.loads(path.read_text(encoding="utf-8"))
+    if earlier["data"]["sha256"] != data_sha256:
+        raise SystemExit(f"{path}: measured on another file (SHA-256 "
+                         f"{earlier['data']['sha256'][:12]}...); merge only the same data")
+    now = {r["name"] for r in rows}
+    return [r for r in earlier["rows"] if r["name"] not in now] + rows
+
+
 def ingest(source: Path, mapping: Path, out: Path) -> Path:
     """``tactile ingest SOURCE --mapping MAPPING --out OUT`` (the command a user runs)."""
     exe = Path(sys.executable).with_name("tactile")
@@ -156,6 +172,9 @@ def main() -> None:
     ap.add_argument("--only", default=None, help="comma-separated candidate names")
     ap.add_argument("--out", type=Path, default=None, help="keep the run folders here")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--merge", type=Path, default=None,
+                    help="an earlier grasp_outcome.json on the same data: keep its rows for "
+                         "the candidates not run now")
     ap.add_argument("--figures", type=Path, default=ROOT / "benchmarks/figures")
     args = ap.parse_args()
     read_once()
@@ -182,6 +201,8 @@ def main() -> None:
                       f"{100 * row['f1_slipped']:.2f} %, {row['n_params']:,} params, "
                       f"{row['latency_ms']:.3f} ms, {row['train_s_all_folds']:.0f} s",
                       flush=True)
+    if args.merge is not None:
+        rows = merged_rows(args.merge, rows, sha256_of(data))
     svms = [r for r in rows if r["name"].startswith("svm_") and r["mode"] == "grouped"]
     chosen_svm = max(svms, key=lambda r: r["macro_f1"])["name"] if svms else None
     strat = [r for r in rows if r["mode"] == "stratified"
@@ -198,11 +219,14 @@ def main() -> None:
         "baseline_mlp_stratified_f1": None if base is None else base["macro_f1"],
     }
     record = {"benchmark": "grasp_outcome", "tool_version": __version__,
-              "created_utc": utc_now(), "data": {"path": str(data), "sha256": sha256_of(data)},
+              "created_utc": utc_now(),
+              "command": " ".join(["benchmarks/grasp_outcome.py", *sys.argv[1:]]),
+              "merged_from": None if args.merge is None else str(args.merge),
+              "data": {"path": str(data), "sha256": sha256_of(data)},
               "protocol": "5-fold CV, stratified by slipped and grouped by object; settings "
                           "chosen by grouped macro F1", "rows": rows, "summary": summary}
     args.figures.mkdir(parents=True, exist_ok=True)
-    if not args.only:
+    if not args.only or args.merge is not None:
         (args.figures / "grasp_outcome.json").write_text(json.dumps(record, indent=2) + "\n")
         points = [RunPoint(run=r["run"], label=r["name"], family=r["family"], eval_name="cv",
                            metrics_path="", score=r["macro_f1"], accuracy=r["accuracy"],

@@ -15,7 +15,7 @@ ROOT = Path(tactile_cli.__file__).parent
 #: Modules at the top of the package that every package may import (they import no
 #: package of ours but each other).
 FOUNDATIONS = {"errors", "progress", "interrupt", "config_file", "vocabulary", "natural",
-               "input_guard", "threads", "_version"}
+               "input_guard", "threads", "text_table", "_version"}
 #: Method packages: any stream may enter them.
 METHODS = {"learn", "fos", "grade", "spectral"}
 #: Sensor chains, by chain: what only one sensor's data can enter. The event-camera chain of

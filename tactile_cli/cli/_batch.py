@@ -109,10 +109,10 @@ def run_file_batch(verb: str, run: Callable[..., FileBatchResult], *,
     """``run(on_plan=, on_progress=, on_item=)`` (a library batch verb with its arguments
     bound) with a :class:`FileBatchPrinter`, then :func:`finish_batch`; ``flags``: the
     command's table for :func:`to_flags`."""
-    from ._errors import COMMON_FLAGS, to_flags
+    from ._errors import spell
 
     printer = FileBatchPrinter(verb, progress=progress, todo=todo, describe=describe,
-                               flags=lambda t: to_flags(t, {**COMMON_FLAGS, **flags}))
+                               flags=lambda t: spell(t, flags))
     with printer.running():
         result = run(on_plan=printer.on_plan, on_progress=printer.on_progress,
                      on_item=printer.on_item)

@@ -93,6 +93,27 @@ def to_flags(message: str, flags: Mapping[str, Flag]) -> str:
     return _REFERENCE.sub(spell, message)
 
 
+def command_flags() -> dict[str, str]:
+    """The running command's options by their Python names, each with its long flag
+    (``{"max_steps": "--max-steps"}``): a library argument named like the option it comes
+    from is spelt without a table entry; empty outside a command."""
+    from ._options import current_context
+
+    ctx = current_context()
+    if ctx is None:
+        return {}
+    return {p.name: longs[0] for p in ctx.command.params
+            if p.param_type_name == "option" and p.name
+            and (longs := [o for o in p.opts if o.startswith("--")])}
+
+
+def spell(message: str, flags: Mapping[str, Flag] | None = None) -> str:
+    """``message`` through :func:`to_flags` with the running command's table: its options
+    (:func:`command_flags`), :data:`COMMON_FLAGS` and ``flags`` (the command's ``FLAGS``:
+    library names that differ from the option's)."""
+    return to_flags(message, {**command_flags(), **COMMON_FLAGS, **(flags or {})})
+
+
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
     print(f"tactile: error: {message}", file=sys.stderr)
     raise SystemExit(code)
@@ -146,10 +167,12 @@ def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = Non
     Ctrl-C and SIGTERM unwind (temporary files are removed) and exit 130.
 
     ``flags`` maps the library arguments this command's errors can name to its flags
-    (``{"bin_s": ("--bin-ms", seconds_as_ms)}``), on top of :data:`COMMON_FLAGS`; the
-    message is printed through :func:`to_flags`, so the library says ``overwrite=True`` and
-    the command line ``--overwrite``. Each command module keeps its table in ``FLAGS``
-    (tests/cli/test_errors.py checks that every flag there is an option of the command).
+    (``{"bin_s": ("--bin-ms", seconds_as_ms)}``) where the name is not the option's own
+    (those are spelt from the command, :func:`command_flags`), on top of
+    :data:`COMMON_FLAGS`; the message is printed through :func:`spell`, so the library says
+    ``overwrite=True`` and the command line ``--overwrite``. Each command module keeps its
+    table in ``FLAGS`` (tests/cli/test_errors.py checks that every flag there is an option of
+    the command).
     An argument missing from the table is printed as the library wrote it (a Python name
     in backticks): less familiar on the command line, never wrong.
 
@@ -158,7 +181,7 @@ def run_guarded(func: Callable[[], T], *, flags: Mapping[str, Flag] | None = Non
     line; on an error the first is added to the error line. The warning filters are left as
     they are (pytest's ``error`` filter still turns them into failures).
     """
-    table = {**COMMON_FLAGS, **(flags or {})}
+    table = {**command_flags(), **COMMON_FLAGS, **(flags or {})}
     # SIGINT too: a KeyboardInterrupt that surfaced during interpreter shutdown would make
     # CPython exit by SIGINT instead of with code 130
     previous = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}

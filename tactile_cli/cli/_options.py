@@ -86,6 +86,15 @@ def usage_error(exc: Any) -> int:
     return exc.exit_code if exc.exit_code else EXIT_USAGE
 
 
+def current_context() -> Any:
+    """The click context of the command being run, or None outside one."""
+    try:
+        from typer._click.globals import get_current_context  # type: ignore[import-not-found]
+    except ImportError:  # pragma: no cover - older typer on plain click
+        from click import get_current_context
+    return get_current_context(silent=True)
+
+
 def data_files(data: list[Path] | None, ctx: typer.Context) -> list[Path]:
     """``--data`` values plus the files a shell glob put after it (``--data runs/*.h5``); a
     left-over argument that looks like an option is refused (for commands that allow extra
@@ -123,4 +132,4 @@ DeviceOption = Annotated[str, typer.Option(
 
 __all__ = ["EXIT_USAGE", "Abort", "BadParameter", "ClickException", "DeviceOption", "JsonOption",
            "NoArgsIsHelpError", "OverwriteOption", "SceneConfigOption", "SeedOption",
-           "data_files", "finite_float_options", "runs_and_files", "usage_error"]
+           "current_context", "data_files", "finite_float_options", "runs_and_files", "usage_error"]

@@ -1,8 +1,8 @@
 """Pieces every command shares on the way out: JSON on stdout, warnings on stderr, text
 tables, and the progress of a long command (a bar on a terminal, else one line per step).
 
-The library returns dataclasses and plain text (:mod:`tactile_cli.learn.tables` turns
-results into :class:`~tactile_cli.learn.tables.TextTable` rows); this module only renders
+The library returns dataclasses and plain text (:mod:`tactile_cli.text_table`: results as
+:class:`~tactile_cli.text_table.TextTable` rows and lines); this module only renders
 them; results that render themselves (``table()``, ``summary_lines()``) go through
 :func:`print_result`.
 """
@@ -13,12 +13,11 @@ import json
 import sys
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import typer
 
-if TYPE_CHECKING:
-    from ..learn.tables import TextTable
+from ..text_table import TextTable
 
 
 def echo_json(obj: Any) -> None:
@@ -39,7 +38,7 @@ def _rich_table(table: TextTable) -> Any:
 
     out = Table(title=table.title, caption=table.caption)
     for i, col in enumerate(table.columns):
-        out.add_column(col, justify="left" if i < table.left else "right",
+        out.add_column(col, justify="left" if table.is_text(i) else "right",
                        overflow="fold" if i in table.fold else "ellipsis")
     for row in table.rows:
         out.add_row(*row)
@@ -52,8 +51,6 @@ def print_blocks(blocks: Sequence[str | TextTable], *,
     a number of columns, or ``"natural"``: as wide as the widest table needs, so no cell
     is cut or folded in a file or a pipe."""
     from rich.console import Console
-
-    from ..learn.tables import TextTable
 
     items = [_rich_table(b) if isinstance(b, TextTable) else b for b in blocks]
     columns: int | None = None

@@ -15,8 +15,7 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"segment_s": "--segment-s", "cutoff_hz": "--cutoff-hz",
-                          "out": "--out", "out_dir": "--out-dir", **BATCH_FLAGS}
+FLAGS: dict[str, Flag] = {**BATCH_FLAGS}
 
 
 def accel_prepare_command(

@@ -9,10 +9,11 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
+from ._options import JsonOption, OverwriteOption
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"out": "--out", "config": "--rois"}
+FLAGS: dict[str, Flag] = {"config": "--rois"}
 
 
 def centroids_command(
@@ -27,9 +28,8 @@ def centroids_command(
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", "-t", help="Trial to convert; repeatable (default: every trial with "
         "events).", metavar="TRIAL", show_default=False)] = None,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
-                       ] = False,
+    overwrite: OverwriteOption = False,
+    as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """ROI centroid trajectories (paper 000, sec. 5.2, eq. 19) as a signal stream for

@@ -12,50 +12,34 @@ from ._errors import Flag, run_guarded
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {
-    "data_name": "--data-name",
-    "metric": "--metric",
-    "margin_pp": "--margin",
-    "out_dir": "--out",
-    "targets": "--target",
-}
+FLAGS: dict[str, Flag] = {"margin_pp": "--margin", "out_dir": "--out", "targets": "--target"}
 
 
 def compare_command(
-    runs: Annotated[
-        list[Path], typer.Argument(help="Run folders written by `tactile train`, each evaluated "
-                                   "with `tactile evaluate` on the same data.",
-                                   metavar="RUN", show_default=False)],
-    data_name: Annotated[
-        str | None,
-        typer.Option("--data-name", help="Evaluation to compare (RUN/eval/<name>); default: "
-                     "the one every run has.", metavar="NAME", show_default=False),
-    ] = None,
-    margin: Annotated[
-        float, typer.Option(min=0.0, help="Accuracy margin in percentage points: the model "
-                            "this scene needs is the smallest within it of the best.")
-    ] = 0.5,
-    metric: Annotated[
-        str, typer.Option(help="Score to compare: accuracy (per window), macro_f1, "
-                          "trial_accuracy (majority vote per trial, for trial-level targets) "
-                          "or f1:<class> (e.g. f1:slip) of the primary head.")
-    ] = "accuracy",
-    out: Annotated[
-        Path | None,
-        typer.Option("--out", "-o", help="Folder for compare.png (accuracy against latency, "
-                     "Pareto front), compare.csv and compare.json.", metavar="FOLDER",
-                     show_default=False),
-    ] = None,
+    runs: Annotated[list[Path], typer.Argument(
+        help="Run folders written by `tactile train`, each evaluated with `tactile evaluate` on "
+        "the same data.", metavar="RUN", show_default=False)],
+    data_name: Annotated[str | None, typer.Option(
+        "--data-name",
+        help="Evaluation to compare (RUN/eval/<name>); default: the one every run has.",
+        metavar="NAME", show_default=False)] = None,
+    margin: Annotated[float, typer.Option(
+        min=0.0, help="Accuracy margin in percentage points: the model this scene needs is the "
+        "smallest within it of the best.")] = 0.5,
+    metric: Annotated[str, typer.Option(
+        help="Score to compare: accuracy (per window), macro_f1, trial_accuracy (majority vote "
+        "per trial, for trial-level targets) or f1:<class> (e.g. f1:slip) of the primary head."
+    )] = "accuracy",
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Folder for compare.png (accuracy against latency, Pareto front), "
+        "compare.csv and compare.json.", metavar="FOLDER", show_default=False)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print compare.json to stdout.")
                        ] = False,
-    target: Annotated[
-        list[str] | None,
-        typer.Option("--target", help="HEAD=VALUE, repeatable: an accuracy (fraction) a "
-                     "classification head must reach or an MAE a regression head must not "
-                     "exceed; the model this scene needs is then the smallest meeting every "
-                     "target (e.g. --target motion=0.948 --target speed_cm_s=3.4).",
-                     metavar="HEAD=VALUE", show_default=False),
-    ] = None,
+    target: Annotated[list[str] | None, typer.Option(
+        "--target", help="HEAD=VALUE, repeatable: an accuracy (fraction) a classification head "
+        "must reach or an MAE a regression head must not exceed; the model this scene needs is "
+        "then the smallest meeting every target (e.g. --target motion=0.948 --target "
+        "speed_cm_s=3.4).", metavar="HEAD=VALUE", show_default=False)] = None,
 ) -> None:
     """Compare runs on one evaluation: accuracy against latency per window (batch 1), the
     Pareto front, and the model this scene needs (the fewest parameters within --margin

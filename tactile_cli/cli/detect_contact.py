@@ -15,10 +15,10 @@ from ._errors import Flag, run_guarded
 from ._options import JsonOption
 from ._output import print_result
 
-FLAGS: dict[str, Flag] = {"band_hz": "--band", "band_width_hz": "--band-width",
-                          "width_hz": "--band-width", "plot": "--plot", "out": "--samples-out",
-                          "trial": "--trial", "trials": "--trial", "rate_hz": "--rate",
-                          "scenario": "--scenario", "follow_s": "--wait"}
+FLAGS: dict[str, Flag] = {
+    "band_hz": "--band", "band_width_hz": "--band-width", "width_hz": "--band-width",
+    "out": "--samples-out", "trials": "--trial", "rate_hz": "--rate", "follow_s": "--wait",
+}
 
 
 class Scenario(enum.StrEnum):
@@ -58,9 +58,8 @@ def detect_contact_command(
     find_band_: Annotated[bool, typer.Option("--find-band", help="Also propose the most "
                                              "contact-sensitive band from the labelled "
                                              "contact trials.")] = False,
-    band_width: Annotated[float | None, typer.Option("--band-width", help="Width (Hz) of the "
-                                                     "proposed band (default: the band's).")
-                          ] = None,
+    band_width: Annotated[float | None, typer.Option(
+        "--band-width", help="Width (Hz) of the proposed band (default: the band's).")] = None,
     follow_: Annotated[bool, typer.Option("--follow", help="Read FILE as a live text stream "
                                           "and print events as they happen.")] = False,
     rate: Annotated[float, typer.Option("--rate", min=1.0, help="Sample rate of the stream "

@@ -9,21 +9,18 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
-from ._options import data_files
+from ._options import JsonOption, data_files
 
-FLAGS: dict[str, Flag] = {"data_paths": "--data", "stride": "--stride", "split": "--split",
-                          "threads": "--threads"}
+FLAGS: dict[str, Flag] = {"data_paths": "--data"}
 
 
 def detect_delay_command(
     ctx: typer.Context,
     run: Annotated[Path, typer.Argument(help="Run folder of `tactile train` with a `motion` "
                                              "head.", show_default=False, metavar="RUN")],
-    data: Annotated[
-        list[Path], typer.Option("--data", "-d", help="Prepared HDF5 file(s) "
-                                 "(`tactile accel-prepare`).", show_default=False,
-                                 metavar="FILE")
-    ],
+    data: Annotated[list[Path], typer.Option(
+        "--data", "-d", help="Prepared HDF5 file(s) (`tactile accel-prepare`).",
+        show_default=False, metavar="FILE")],
     stride: Annotated[int, typer.Option(min=1, help="Samples between window ends (paper: 5).")
                       ] = 5,
     split: Annotated[str, typer.Option(help="test: the run's test trials (or, for other data, "
@@ -31,7 +28,7 @@ def detect_delay_command(
                      ] = "test",
     threads: Annotated[int, typer.Option(min=1, help="torch threads for the inference time.")
                        ] = 1,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Detection delay of slippage (paper 001, sec. 6.5): slip samples the run needs before
     it says slip (delay 1, ms) plus its inference time at batch 1 on this CPU (delay 2).

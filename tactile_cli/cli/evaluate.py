@@ -10,23 +10,14 @@ import typer
 
 from ..errors import InputError
 from ._batch import BATCH_FLAGS, FileBatchPrinter, SchedulerOption, WorkersOption, finish_batch
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._errors import Flag, run_guarded, spell
 from ._options import DeviceOption, data_files
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "data_paths": "--data FILE...",
-    "split": "--split",
-    "threshold": "--threshold",
-    "overwrite": "--overwrite",
-    "name": "--name",
-    "exported": "--exported FILE",
-    "perturb": "--perturb",
-    "threads": "--threads",
-    "shift_threshold_sd": "--shift-threshold",
-    "device": "--device",
-    **BATCH_FLAGS,
+    "data_paths": "--data FILE...", "exported": "--exported FILE",
+    "shift_threshold_sd": "--shift-threshold", **BATCH_FLAGS,
 }
 
 
@@ -34,65 +25,47 @@ def evaluate_command(
     ctx: typer.Context,
     run: Annotated[Path, typer.Argument(help="Run folder written by `tactile train`.",
                                         show_default=False, metavar="RUN")],
-    data: Annotated[
-        list[Path] | None,
-        typer.Option("--data", "-d", help="Tactile HDF5 file(s) to evaluate on; repeat the "
-                     "option or list several files after it. A cross-validated run (train "
-                     "--cv) needs none: each fold is scored on its held-out trials.",
-                     show_default=False, metavar="FILE"),
-    ] = None,
-    split: Annotated[
-        str, typer.Option(help="all: every trial; test: the trials the run's split rule puts "
-                          "in test (on the training files, the training's test split).")
-    ] = "all",
-    name: Annotated[
-        str | None,
-        typer.Option(help="Name of the results folder RUN/eval/<name> (default from the data "
-                     "file names).", show_default=False),
-    ] = None,
-    threads: Annotated[
-        int, typer.Option(min=1, help="torch CPU threads for the latency measurement.")
-    ] = 1,
-    latency: Annotated[
-        bool, typer.Option("--latency/--no-latency", help="Measure latency and throughput.")
-    ] = True,
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", "-d", help="Tactile HDF5 file(s) to evaluate on; repeat the option or list "
+        "several files after it. A cross-validated run (train --cv) needs none: each fold is "
+        "scored on its held-out trials.", show_default=False, metavar="FILE")] = None,
+    split: Annotated[str, typer.Option(
+        help="all: every trial; test: the trials the run's split rule puts in test (on the "
+        "training files, the training's test split).")] = "all",
+    name: Annotated[str | None, typer.Option(
+        help="Name of the results folder RUN/eval/<name> (default from the data file names).",
+        show_default=False)] = None,
+    threads: Annotated[int, typer.Option(
+        min=1, help="torch CPU threads for the latency measurement.")] = 1,
+    latency: Annotated[bool, typer.Option(
+        "--latency/--no-latency", help="Measure latency and throughput.")] = True,
     overwrite: Annotated[
         bool, typer.Option(help="Replace an existing RUN/eval/<name> folder.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print metrics.json to stdout.")] = False,
     device: DeviceOption = "auto",
-    each: Annotated[
-        bool, typer.Option("--each", help="Evaluate on each --data file apart, into "
-                           "RUN/eval/<file stem>, one task per file on Dask (--workers, "
-                           "--scheduler); evaluations newer than their file and the model "
-                           "are skipped; no latency (tasks side by side would time each "
-                           "other).")
-    ] = False,
+    each: Annotated[bool, typer.Option(
+        "--each", help="Evaluate on each --data file apart, into RUN/eval/<file stem>, one task "
+        "per file on Dask (--workers, --scheduler); evaluations newer than their file and the "
+        "model are skipped; no latency (tasks side by side would time each other).")] = False,
     scheduler: SchedulerOption = None,
     workers: WorkersOption = None,
-    perturb: Annotated[
-        bool, typer.Option("--perturb", help="Also re-evaluate on perturbed copies of the data "
-                           "(see `tactile perturb`); results in RUN/perturb/<name>/.")
-    ] = False,
-    perturb_kinds: Annotated[
-        str, typer.Option("--perturb-kinds", help="Kinds for --perturb: noise, lowpass, drop, "
-                          "drop_events, drop_samples, scale (comma-separated).")
-    ] = "noise,lowpass,drop,scale",
-    threshold: Annotated[
-        str, typer.Option(help="--perturb breaking point: accuracy below a factor of the clean "
-                          "accuracy (0.9x) or an accuracy (0.95 or 95%).")
-    ] = "0.9x",
-    exported: Annotated[
-        Path | None,
-        typer.Option("--exported", help="A file `tactile export` wrote from this run: its "
-                     "outputs are checked against the run's on the same windows and its "
-                     "batch-1 latency (onnxruntime or TorchScript) is measured beside torch's.",
-                     metavar="FILE", show_default=False),
-    ] = None,
-    shift_threshold: Annotated[
-        float, typer.Option("--shift-threshold", help="Flag a channel whose mean in the "
-                            "evaluated data lies more than this many training standard "
-                            "deviations from the training data's.", metavar="SD")
-    ] = 1.0,
+    perturb: Annotated[bool, typer.Option(
+        "--perturb", help="Also re-evaluate on perturbed copies of the data (see `tactile "
+        "perturb`); results in RUN/perturb/<name>/.")] = False,
+    perturb_kinds: Annotated[str, typer.Option(
+        "--perturb-kinds", help="Kinds for --perturb: noise, lowpass, drop, drop_events, "
+        "drop_samples, scale (comma-separated).")] = "noise,lowpass,drop,scale",
+    threshold: Annotated[str, typer.Option(
+        help="--perturb breaking point: accuracy below a factor of the clean accuracy (0.9x) or "
+        "an accuracy (0.95 or 95%).")] = "0.9x",
+    exported: Annotated[Path | None, typer.Option(
+        "--exported", help="A file `tactile export` wrote from this run: its outputs are checked "
+        "against the run's on the same windows and its batch-1 latency (onnxruntime or "
+        "TorchScript) is measured beside torch's.", metavar="FILE", show_default=False)] = None,
+    shift_threshold: Annotated[float, typer.Option(
+        "--shift-threshold", help="Flag a channel whose mean in the evaluated data lies more "
+        "than this many training standard deviations from the training data's.", metavar="SD"
+    )] = 1.0,
 ) -> None:
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
@@ -141,7 +114,7 @@ def _evaluate_each(run: Path, files: list[Path], *, split: str, overwrite: bool,
             raise InputError(f"{flag} goes with one evaluation; --each names each results "
                              "folder after its data file")
     printer = FileBatchPrinter("evaluate", describe=describe_item, todo="to evaluate",
-                               flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+                               flags=lambda t: spell(t, FLAGS))
     with printer.running():
         result = evaluate_each(run, files, split=split,  # type: ignore[arg-type]
                                overwrite=overwrite, scheduler=scheduler, workers=workers,

@@ -11,11 +11,7 @@ from ._errors import Flag, run_guarded
 from ._output import echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {
-    "format": "--format",
-    "out": "--out",
-    "overwrite": "--overwrite",
-}
+FLAGS: dict[str, Flag] = {"format": "--format"}
 
 
 def export_command(
@@ -26,10 +22,9 @@ def export_command(
         Path, typer.Option("--out", "-o", help="Model file to write (e.g. model.onnx); its "
                            "sidecar FILE.json is written beside it.", metavar="FILE",
                            show_default=False)],
-    fmt: Annotated[
-        str, typer.Option("--format", help="onnx (onnxruntime or any ONNX runtime) or "
-                          "torchscript (torch.jit.load; deprecated by torch, prefer onnx).")
-    ] = "onnx",
+    fmt: Annotated[str, typer.Option(
+        "--format", help="onnx (onnxruntime or any ONNX runtime) or torchscript (torch.jit.load; "
+        "deprecated by torch, prefer onnx).")] = "onnx",
     overwrite: Annotated[
         bool, typer.Option(help="Replace an existing FILE and FILE.json.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the sidecar to stdout.")

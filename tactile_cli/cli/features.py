@@ -9,17 +9,13 @@ from typing import Annotated, Any
 
 import typer
 
-from ..errors import InputError
 from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption, run_file_batch
 from ._errors import Flag, run_guarded
-from ._options import JsonOption
+from ._options import JsonOption, OverwriteOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", "out_dir": "--out-dir",
-                          "out": "--out", "config": "--config", "stream": "--stream",
-                          "window_s": "--window-s", "hop_s": "--hop-s", "nperseg": "--nperseg",
-                          **BATCH_FLAGS}
+FLAGS: dict[str, Flag] = {"groups": "--group", "bands_hz": "--band", **BATCH_FLAGS}
 
 app = typer.Typer(
     name="features",
@@ -30,48 +26,11 @@ app = typer.Typer(
 )
 
 
-def _bands(texts: list[str] | None) -> dict[str, tuple[float, float]]:
-    """``["mid=100-400"]`` -> ``{"mid": (100.0, 400.0)}``."""
-    bands: dict[str, tuple[float, float]] = {}
-    for text in texts or []:
-        name, sep, span = text.partition("=")
-        lo, dash, hi = span.partition("-")
-        try:
-            if not (sep and dash and name.strip()):
-                raise ValueError
-            bands[name.strip()] = (float(lo), float(hi))
-        except ValueError:
-            raise InputError(f"--band {text!r}: give NAME=LOW-HIGH in Hz, e.g. mid=100-400"
-                             ) from None
-    return bands
-
-
-def _check_modes(files: list[Path], out: Path | None, out_dir: Path | None,
-                 stream: str | None, extras: dict[str, Any]) -> None:
-    """Which options go together (one-line errors before any work)."""
-    if (out is None) == (out_dir is None):
-        raise InputError("give --out FILE (one input) or --out-dir FOLDER (one file per input)")
-    if out_dir is not None and stream is None:
-        raise InputError("--out-dir goes with --stream NAME (the taxel-slip layout is one "
-                         "file per scene: --out)")
-    if out is not None and len(files) > 1:
-        raise InputError("--out takes one input; give --out-dir FOLDER for several",
-                         path=files[1])
-    if out is not None and (extras["scheduler"] is not None or extras["workers"] is not None):
-        raise InputError("--scheduler and --workers go with --out-dir (one task per file)")
-    if stream is None and (extras["groups"] or extras["bands"]):
-        raise InputError("--group and --band go with --stream NAME")
-    if stream is not None and extras["config"] is not None:
-        raise InputError("--config is the taxel-slip layout's; with --stream give --window-s, "
-                         "--hop-s, --nperseg, --band and --group")
-
-
 @app.command("spectral")
 def spectral_command(
     files: Annotated[list[Path], typer.Argument(
         help="Tactile HDF5 file of taxel-array trials (tactile simulate taxel-slip), or with "
-        "--stream any tactile file; several with --out-dir.", metavar="FILE",
-        show_default=False)],
+        "--stream any tactile file; several with --out-dir.", metavar="FILE", show_default=False)],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Output tactile HDF5 file "
                                              "(one input).", metavar="FILE",
                                              show_default=False)] = None,
@@ -102,7 +61,7 @@ def spectral_command(
     nperseg: Annotated[int, typer.Option(
         "--nperseg", min=8, help="With --stream: Welch segment (samples; at most the "
         "window), overlap half.")] = 64,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    overwrite: OverwriteOption = False,
     as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:
@@ -112,18 +71,23 @@ def spectral_command(
     world), for tactile train CONFIG --data OUT. With --stream NAME: the same features of
     any multichannel stream (accelerometers, vibration fingers, taxels of any layout), one
     array or several (--group), the stream's per-sample labels taken at each window's end."""
-    from ..spectral.stream_features import stream_features_each, write_stream_features
+    from ..spectral.stream_features import (
+        check_feature_modes,
+        parse_bands,
+        stream_features_each,
+        write_stream_features,
+    )
     from ..taxel import write_taxel_features
 
     def settings() -> dict[str, Any]:
         groups = [[g.strip() for g in text.split(",") if g.strip()] for text in group or []]
         return {"stream": stream, "window_s": window_s, "hop_s": hop_s, "nperseg": nperseg,
-                "bands_hz": _bands(band), "groups": groups or None}
+                "bands_hz": parse_bands(band), "groups": groups or None}
 
     def body() -> Any:
-        _check_modes(files, out, out_dir, stream, {"scheduler": scheduler, "workers": workers,
-                                                   "groups": group, "bands": band,
-                                                   "config": config})
+        check_feature_modes(files, out=out, out_dir=out_dir, stream=stream,
+                            scheduler=scheduler, workers=workers, groups=group, bands_hz=band,
+                            config=config)
         if out_dir is not None:
             return run_file_batch("features", lambda **printing: stream_features_each(
                 files, out_dir, settings=settings(), overwrite=overwrite, scheduler=scheduler,

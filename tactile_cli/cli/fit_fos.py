@@ -5,30 +5,24 @@ from __future__ import annotations
 
 import enum
 import json
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from ..fos.compile_cache import cache_root
-from ..fos.fit_files import CURVE_MODELS, EQUATIONS, KINDS, REGION_SOURCES
+from ..fos.fit_files import CURVE_MODELS, KINDS, REGION_SOURCES
 from ._batch import BATCH_FLAGS, SchedulerOption, WorkersOption
-from ._errors import COMMON_FLAGS, Flag, run_guarded, seconds_as_ms, to_flags
+from ._errors import Flag, run_guarded, seconds_as_ms, spell
+from ._options import JsonOption
+from ._output import print_blocks
 from .progress import Spinner
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
     "bin_s": ("--bin-ms", seconds_as_ms),
-    **{name: f"--{name.replace('_', '-')}" for name in (
-        "kind", "regions", "model", "units", "channels", "reduce", "region_label", "min_snr",
-        "stream", "csv", "plot", "solver", "max_steps", "rtol", "atol", "max_curves")},
-    "press_duration_s": "--press-duration",
-    "p0": "--p0",
-    "write": "--no-write",
-    **BATCH_FLAGS,
+    "csv": "--csv",
+    "press_duration_s": "--press-duration", "write": "--no-write", **BATCH_FLAGS,
 }
 
 Kind = enum.StrEnum("Kind", {k: k for k in KINDS})
@@ -37,137 +31,18 @@ CurveModel = enum.StrEnum("CurveModel", {k: k for k in CURVE_MODELS})
 Solver = enum.StrEnum("Solver", {k: k for k in ("levenberg_marquardt", "gauss_newton")})
 Reduce = enum.StrEnum("Reduce", {k: k for k in ("none", "mean")})
 
-#: Rows of the table printed in full; beyond it converged rows are elided (failed never are).
-MAX_ROWS = 60
-
-
-def _pm(value: Any, se: Any, fmt: str) -> str:
-    if value is None:
-        return "-"
-    return f"{value:{fmt}}" + (f" ± {se:{fmt}}" if se is not None else "")
-
-
-def _verdict_cell(r: dict[str, Any]) -> str:
-    """The order verdict; a relaxation with its share and time constant."""
-    if r["order_verdict"] == "relaxation" and r.get("relax_fraction") is not None:
-        return (f"relaxation ({100 * r['relax_fraction']:.0f} % over "
-                f"{r['relax_tau_s']:.3g} s)")
-    return r["order_verdict"]
-
-
-def _layout(records: list[dict[str, Any]]) -> tuple[list[tuple[str, str]], str | None, bool,
-                                                     bool]:
-    """The table's columns, the one unit of every row (None when they differ), whether
-    rows are per channel and whether any has a force label."""
-    units = {r["units"] for r in records}
-    unit = units.pop() if len(units) == 1 else None
-    short = {"events/bin": "ev/bin"}.get(unit or "", unit)
-    columns = [("trial", "left"), ("force", "right"),
-               (f"alpha ({short})" if unit else "alpha", "right"),
-               ("tau (s)", "right"), ("T (s)", "right"), ("R", "right"),
-               (f"s ({short})" if unit else "s", "right"),
-               (f"RSS ({short})^2" if unit else "RSS", "right"),
-               ("status", "left"), ("steps", "right"), ("order", "left")]
-    if unit is None:
-        columns.insert(2, ("units", "left"))
-    per_channel = any("channel" in r for r in records)
-    if per_channel:
-        columns[1:1] = [("channel", "left"), ("region", "left")]
-    has_force = any(r.get("force_level", r.get("force_grade")) is not None for r in records)
-    if not has_force:
-        columns.pop(3 if per_channel else 1)
-    return columns, unit, per_channel, has_force
-
-
-def _row(r: dict[str, Any], model: str, unit: str | None, per_channel: bool,
-         has_force: bool) -> list[str]:
-    force = r.get("force_level", r.get("force_grade", ""))
-    cells = [
-        str(r["trial"]), "" if force is None else str(force),
-        _pm(r["alpha"], r["alpha_se"], ".1f" if r["units"] == "events/bin" else ".4g"),
-        _pm(r["tau_s"], r["tau_se"], ".4f"),
-        _pm(r["duration_s"], r["duration_se"], ".3f") if model == "pulse" else "",
-        "-" if r["pearson_r"] is None else f"{r['pearson_r']:.5f}",
-        _pm(r["residual_std"], None, ".4g"), _pm(r["rss"], None, ".4g"),
-        r["status"] if r["status"] == "converged" else f"[red]{r['status']}[/]",
-        str(r["n_steps"]), _verdict_cell(r),
-    ]
-    if unit is None:
-        cells.insert(2, r["units"])
-    if per_channel:
-        cells[1:1] = [str(r["channel"]), str(r["region"])]
-    if not has_force:
-        cells.pop(3 if per_channel else 1)
-    return cells
-
-
-def _print_region(console: Console, name: str, region: Any) -> None:
-    """One region's table (long ones cut to the first and last 20 rows and every failure),
-    its failures explained, and its summary line."""
-    records, summary = region.records, region.summary
-    table = Table(title=f"{name}: {region.model} ({EQUATIONS[region.model]})")
-    columns, unit, per_channel, has_force = _layout(records)
-    for col, justify in columns:
-        table.add_column(col, justify=justify)
-    shown = records
-    if len(records) > MAX_ROWS:
-        failed = [r for r in records if r["status"] != "converged"]
-        keep = {id(r) for r in records[:20] + records[-20:] + failed}
-        shown = [r for r in records if id(r) in keep]
-    for r in shown:
-        table.add_row(*_row(r, region.model, unit, per_channel, has_force))
-    if len(shown) < len(records):
-        table.caption = (f"{len(records) - len(shown)} converged trials not shown; "
-                         "use --json or --csv for all")
-    console.print(table)
-    for status, n in summary["status_counts"].items():
-        if status != "converged":
-            message = next(r["status_message"] for r in records if r["status"] == status)
-            console.print(f"  [red]{status}[/] ({n} trial(s)): {message}")
-    median = summary["median_pearson_r"]
-    verdicts = ", ".join(f"{k} {v}" for k, v in sorted(summary["verdict_counts"].items()))
-    console.print(
-        f"{name}: {summary['n_converged']} converged, {summary['n_failed']} failed; "
-        f"median R {'-' if median is None else f'{median:.5f}'}; order: {verdicts}"
-        + (f"; written to {region.group}" if region.group else ""))
-    missed = region.no_step or []
-    if missed:
-        shown_names = ", ".join(missed[:10]) + (f", ... ({len(missed)} in all)"
-                                                if len(missed) > 10 else "")
-        console.print(f"  no step found (not fitted) in {len(missed)} curve(s): {shown_names}",
-                      markup=False, highlight=False)
-    why = region.not_fitted or {}
-    for curve, reason in list(why.items())[:MAX_ROWS]:
-        console.print(f"    {curve}: {reason}", markup=False, highlight=False)
-    if len(why) > MAX_ROWS:
-        console.print(f"    ... {len(why) - MAX_ROWS} more; use --json for all", markup=False,
-                      highlight=False)
-
-
-def _describe(item: Any) -> str:
-    """A batch file's line after ``ok``: each region's converged count and median R."""
-    parts = []
-    for region, s in item.value["summary"].items():
-        median = s["median_pearson_r"]
-        parts.append(f"{region} {s['n_converged']}/{s['n_trials']} converged"
-                     + ("" if median is None else f" (median R {median:.4f})"))
-    return "; ".join(parts)
-
-
 def fit_fos_command(
     files: Annotated[list[Path], typer.Argument(
-        help="A tactile HDF5 file, or CSV curves fitted together: files or folders of "
-             "them, each a header, then t in s and one or more response columns "
-             "(t,x1,x2,...).",
+        help="A tactile HDF5 file, or CSV curves fitted together: files or folders of them, each "
+        "a header, then t in s and one or more response columns (t,x1,x2,...).",
         show_default=False, metavar="FILE")],
     kind: Annotated[Kind | None, typer.Option(
         help="Regions to fit (HDF5): press, slip or both; default both.",
         show_default=False)] = None,
     regions: Annotated[Regions | None, typer.Option(
         help="Where the regions come from (HDF5): the trials' annotations, detected in the "
-             "counts (with --stream: steps found in the signal), or auto (annotations where "
-             "present; the default; with --stream the default is annotations).",
-        show_default=False)] = None,
+        "counts (with --stream: steps found in the signal), or auto (annotations where present; "
+        "the default; with --stream the default is annotations).", show_default=False)] = None,
     bin_ms: Annotated[float | None, typer.Option(
         min=0.001, help="Bin width in ms (HDF5); default 20 for events, a count stream's "
                         "own width.", show_default=False)] = None,
@@ -176,8 +51,7 @@ def fit_fos_command(
              "--stream defaults to step.", show_default=False)] = None,
     units: Annotated[str | None, typer.Option(
         help="Unit of the CSV curves' response (and so of alpha); default: the unit in the "
-             "response column's header, as in 'force (N)', else 'units'.",
-        show_default=False)] = None,
+        "response column's header, as in 'force (N)', else 'units'.", show_default=False)] = None,
     press_duration: Annotated[float | None, typer.Option(
         min=1e-6, help="Known press length T in s for the pulse (default: fitted).",
         show_default=False)] = None,
@@ -200,7 +74,7 @@ def fit_fos_command(
     order: Annotated[bool, typer.Option(
         "--order/--no-order",
         help="Also fit the second-order alternative and give the BIC verdict.")] = True,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON.")] = False,
+    as_json: JsonOption = False,
     csv_out: Annotated[Path | None, typer.Option(
         "--csv", help="Also write the table to this CSV file.", show_default=False,
         metavar="FILE")] = None,
@@ -220,8 +94,7 @@ def fit_fos_command(
         help="Channels of --stream to fit: glob(s), comma-separated, e.g. 'fz_*'; "
              "default all.", show_default=False)] = None,
     reduce: Annotated[Reduce, typer.Option(
-        help="With --stream: fit every channel (none) or the channels' mean.")
-    ] = Reduce.none,
+        help="With --stream: fit every channel (none) or the channels' mean.")] = Reduce.none,
     region_label: Annotated[str | None, typer.Option(
         help="With --stream: fit the regions with this label (an annotation's, e.g. press; "
              "found ones are rise, fall, or pulse with --model pulse); default all.",
@@ -229,9 +102,8 @@ def fit_fos_command(
     scheduler: SchedulerOption = None,
     workers: WorkersOption = None,
     min_snr: Annotated[float | None, typer.Option(
-        min=0.001, help="With --stream --regions detect/auto: a step's change over "
-                        "~1.6 time constants must exceed this many times its noise; "
-                        "default 8.", show_default=False)] = None,
+        min=0.001, help="With --stream --regions detect/auto: a step's change over ~1.6 time "
+        "constants must exceed this many times its noise; default 8.", show_default=False)] = None,
     max_curves: Annotated[int | None, typer.Option(
         min=1, help="With --stream: most curves (trial x channel x region) to search or fit; "
                     "default 4096 (about 20 s); more are refused with the time they would "
@@ -259,10 +131,12 @@ def fit_fos_command(
         from contextlib import ExitStack
 
         from ..fos.fit_files import fit_files
+        from ..fos.text import batch_line, fit_blocks
         from ._batch import FileBatchPrinter, finish_batch
 
-        printer = FileBatchPrinter("fit-fos", progress=None, todo="to fit", describe=_describe,
-                                   flags=lambda t: to_flags(t, {**COMMON_FLAGS, **FLAGS}))
+        printer = FileBatchPrinter("fit-fos", progress=None, todo="to fit",
+                                   describe=lambda item: batch_line(item.value),
+                                   flags=lambda t: spell(t, FLAGS))
         with ExitStack() as stack:
             def on_plan(items: list[Any]) -> None:  # a batch: its bar and lines from here
                 stack.enter_context(printer.running())
@@ -283,12 +157,6 @@ def fit_fos_command(
         elif as_json:
             typer.echo(json.dumps(result.as_dict(), indent=2, allow_nan=False))
         else:
-            console = Console(width=None if sys.stdout.isatty() else 160)
-            for name, region in result.regions.items():
-                _print_region(console, name, region)
-            if result.csv is not None:
-                console.print(f"wrote {result.csv}")
-            if result.figures:
-                console.print(f"wrote {len(result.figures)} figure(s) to {plot}")
+            print_blocks(fit_blocks(result, plot), width=160)
 
     run_guarded(body, flags=FLAGS)

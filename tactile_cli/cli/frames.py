@@ -9,11 +9,10 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded, seconds_as_ms
+from ._options import JsonOption
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"window_s": ("--window-ms", seconds_as_ms), "median": "--median",
-                          "kind": "--kind", "start_s": "--start-s", "end_s": "--end-s",
-                          "out": "--out"}
+FLAGS: dict[str, Flag] = {"window_s": ("--window-ms", seconds_as_ms)}
 
 
 def frames_command(
@@ -42,8 +41,7 @@ def frames_command(
     sheet_only: Annotated[bool, typer.Option("--sheet-only", help="Write only the contact "
                                              "sheet, no per-frame PNGs.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Replace the PNGs of an earlier run.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print what was written as JSON.")
-                       ] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Event frames (paper 000, Fig. 13): events accumulated per window onto the sensor grid,
     optionally median-filtered, written as PNGs plus one contact sheet per trial with the

@@ -3,27 +3,17 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from ._errors import Flag, run_guarded
-
-if TYPE_CHECKING:
-    from ..grade.pipeline import GradeRun
+from ._options import JsonOption
+from ._output import print_blocks
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"label_key": "--label-key", "out": "--out", "plot": "--plot",
-                          "calibrate": "--calibrate", "overlap": "--overlap",
-                          "config": "--config"}
-
-
-def _fmt(v: float | None, spec: str = ".4f") -> str:
-    return "" if v is None or v != v else format(v, spec)
+FLAGS: dict[str, Flag] = {}
 
 
 def grade_command(
@@ -31,10 +21,9 @@ def grade_command(
         help="Tactile HDF5 files (events or an event-count stream with a `net` channel) or "
              "CSV tables trial,area[,level].", metavar="FILE", show_default=False)],
     config: Annotated[Path | None, typer.Option(
-        "--config", "-c", help="Grader YAML config (default: the marker-sensor config "
-        "shipped with tactile, configs/grade_marker.yaml).", metavar="FILE",
-        show_default=False)] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+        "--config", "-c", help="Grader YAML config (default: the marker-sensor config shipped "
+        "with tactile, configs/grade_marker.yaml).", metavar="FILE", show_default=False)] = None,
+    as_json: JsonOption = False,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Write membership, inference and area-vs-level PNGs to this folder.",
         metavar="FOLDER", show_default=False)] = None,
@@ -62,57 +51,14 @@ def grade_command(
 
     def body() -> None:
         from ..grade.pipeline import grade_files
+        from ..grade.text import grade_blocks
 
         run = grade_files(files, config=config, label_key=label_key, plot=plot,
                           calibrate=calibrate, out=out, overlap=overlap, overwrite=overwrite)
         if as_json:
             typer.echo(json.dumps(run.as_dict(), indent=2))
         else:
-            _print(run, multi_file=len({str(f) for f in files}) > 1)
+            print_blocks(grade_blocks(run, multi_file=len({str(f) for f in files}) > 1),
+                         width=160)
 
     run_guarded(body, flags=FLAGS)
-
-
-def _print(run: GradeRun, *, multi_file: bool) -> None:
-    """The calibration, one row per trial and the accuracy and correlation lines."""
-    console = Console(width=None if sys.stdout.isatty() else 160)
-    report, cfg, calib = run.report, run.config, run.calibration
-    if calib is not None:
-        t = Table(title=f"Calibration (written to {calib.out})")
-        for col in ("grade", "n", "Q25", "median", "Q75", "upper boundary"):
-            t.add_column(col)
-        for row in calib.per_grade:
-            t.add_row(row["grade"], str(row["n"]), f"{row['q25']:.6g}", f"{row['median']:.6g}",
-                      f"{row['q75']:.6g}", _fmt(row["upper_boundary"], ".6g"))
-        console.print(t)
-    table = Table(title=f"Force grades ({run.config_path}, {report.method} centroid)")
-    cols = (["file"] if multi_file else []) + [
-        "trial", cfg.input.name, "crisp", "grade", "true", "rules fired (strength)"]
-    for col in cols:
-        table.add_column(col)
-    for t in report.trials:
-        fired = ", ".join(f"{k}={v:.2f}" for k, v in t.firing.items() if v > 0)
-        if t.status != "ok":
-            fired = t.status
-        true = t.true_grade or ""
-        if t.true_level is not None:
-            true += f" (level {t.true_level})"
-        grade = t.grade or "-"
-        if t.error not in (None, 0):
-            grade = f"[red]{grade}[/]"
-        row = ([Path(t.file).name] if multi_file else []) + [
-            t.trial, _fmt(t.area, ".6g"), _fmt(t.crisp), grade, true, fired]
-        table.add_row(*row)
-    console.print(table)
-    s = report.summary
-    if s.n_labelled:
-        console.print(
-            f"{s.n_labelled} labelled trials: {100 * s.accuracy:.1f} % graded right, "
-            f"{100 * s.off_by_one:.1f} % off by one grade, {100 * s.worse:.1f} % worse")
-    if s.pearson_r is not None:
-        console.print(f"Pearson r of {cfg.input.name} with {s.correlation_with.replace('_', ' ')}: "
-                      f"{s.pearson_r:.4f} ({s.n_correlation} trials)")
-    if s.n_graded < s.n_trials:
-        console.print(f"{s.n_trials - s.n_graded} trial(s) not graded (see the rules column)")
-    for p in run.plots:
-        console.print(f"wrote {p}")

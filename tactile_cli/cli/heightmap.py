@@ -9,14 +9,11 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded
-from ._options import JsonOption
+from ._options import JsonOption, OverwriteOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"run_dir": "--model", "out": "--out", "truth_dir": "--truth",
-                          "px_per_mm": "--px-per-mm", "skip_below": "--skip-below",
-                          "workers": "--workers", "trials": "--trial", "plot": "--plot",
-                          "overwrite": "--overwrite"}
+FLAGS: dict[str, Flag] = {"run_dir": "--model", "truth_dir": "--truth", "trials": "--trial"}
 
 
 def heightmap_command(
@@ -49,7 +46,7 @@ def heightmap_command(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Folder for one Fig. 2-style PNG per trial (the frame of largest "
         "height: image and 3-D height map).", metavar="FOLDER", show_default=False)] = None,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output.")] = False,
+    overwrite: OverwriteOption = False,
     as_json: JsonOption = False,
     progress: ProgressOption = None,
 ) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -13,23 +13,15 @@ from ..errors import InputError
 from ..ingest import FORMATS, ingest, parse_labels, parse_options
 from ..ingest.registry import formats_taking, option_names
 from ..store.writer import Compression
-from ._batch import BATCH_FLAGS, scheduler_option, workers_option
-from ._errors import COMMON_FLAGS, Flag, run_guarded, to_flags
+from ._batch import BATCH_FLAGS, run_file_batch, scheduler_option, workers_option
+from ._errors import Flag, run_guarded, spell
 from ._ingest_flags import OPTION_FLAGS
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "format": "--format",
-    **OPTION_FLAGS,
-    "options": "--option",
-    "labels": "--label",
-    "annotations": "--annotations",
-    "trial_labels": "--trial-labels",
-    "out": "--out",
-    "out_dir": "--out-dir",
-    **BATCH_FLAGS,
-    "json": "--json",
+    "format": "--format", **OPTION_FLAGS, "options": "--option", "labels": "--label",
+    **BATCH_FLAGS, "json": "--json",
 }
 OutDirScheduler = scheduler_option("--out-dir: ")
 OutDirWorkers = workers_option("--out-dir: ")
@@ -53,130 +45,74 @@ def _option_help() -> str:
 
 
 def ingest_command(
-    inputs: Annotated[
-        list[Path], typer.Argument(help="Raw recordings: files or folders.", metavar="INPUT",
-                                   show_default=False)
-    ],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output HDF5 file (all inputs "
-                                             "into one).", metavar="FILE",
-                                             show_default=False)] = None,
-    out_dir: Annotated[
-        Path | None,
-        typer.Option("--out-dir", help="Folder for one HDF5 file per input, FOLDER/<input "
-                     "stem>.h5, ingested on Dask; outputs newer than their inputs are skipped "
-                     "(unless --overwrite); a failed input does not stop the others (exit 2).",
-                     metavar="FOLDER", show_default=False),
-    ] = None,
-    fmt: Annotated[
-        str, typer.Option("--format", "-f", help=_format_help(), metavar="NAME")
-    ] = "auto",
-    mapping: Annotated[
-        Path | None,
-        typer.Option(help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml) "
-                     "or the topics of a ROS bag/MCAP (configs/rosbag_tactile_rig.yaml)."
-                     + _formats("mapping"), metavar="FILE"),
-    ] = None,
-    label: Annotated[
-        list[str] | None,
-        typer.Option("--label", "-l", help="key=value label added to every trial; repeatable.",
-                     metavar="KEY=VALUE"),
-    ] = None,
-    width: Annotated[
-        int | None, typer.Option(help="Event sensor width in px (CSV/NPY events; checked "
-                                 "against AEDAT4 files and frames)." + _formats("width_px"))
-    ] = None,
-    height: Annotated[
-        int | None, typer.Option(help="Event sensor height in px (CSV/NPY events; checked "
-                                 "against AEDAT4 files and frames)." + _formats("height_px"))
-    ] = None,
-    sensor: Annotated[
-        str | None, typer.Option(help="Sensor name to record (default from the input)."
-                                 + _formats("sensor_name"))
-    ] = None,
-    option: Annotated[
-        list[str] | None,
-        typer.Option("--option", "-O", help=_option_help(), metavar="KEY=VALUE"),
-    ] = None,
-    fps: Annotated[
-        float | None,
-        typer.Option(
-            min=0.001, metavar="HZ",
-            help="Frame rate of image folders without a timestamps.csv (default: 30 Hz assumed, "
-            "with a note)." + _formats("frame_rate_hz"),
-        ),
-    ] = None,
-    reference: Annotated[
-        str | None,
-        typer.Option(
-            "--reference", metavar="first|NAME",
-            help="Image folders: the no-contact reference frame of every folder: 'first' (the "
-            "first frame in natural order, kept as frame 0) or a file name or stem in each "
-            "folder (default: the file named reference, ref, background or no_contact)."
-            + _formats("reference"),
-        ),
-    ] = None,
-    px_per_mm: Annotated[
-        float | None,
-        typer.Option(
-            "--px-per-mm", min=0.0, metavar="PX",
-            help="Image folders: pixels per millimetre on the gel (DIGIT-like: 16), stored as "
-            "the sensor attribute px_per_mm for calibration and height maps."
-            + _formats("px_per_mm"),
-        ),
-    ] = None,
-    trials_from: Annotated[
-        Path | None,
-        typer.Option(
-            "--trials-from", metavar="FILE",
-            help="Robot recordings: CSV of trial time ranges (start_s,end_s[,trial,labels...], "
-            "seconds from the recording's first message)." + _formats("trials_from"),
-        ),
-    ] = None,
-    annotations: Annotated[
-        Path | None,
-        typer.Option(
-            help="CSV of time intervals per trial (columns trial,start_s,end_s,label), "
-            "stored as /trials/<trial>/annotations.", metavar="FILE",
-        ),
-    ] = None,
-    trial_labels: Annotated[
-        Path | None,
-        typer.Option(
-            help="CSV with a 'trial' column; every other column becomes a label of that "
-            "trial (numbers as numbers, empty cells skipped), except 'split' (train, val or "
-            "test), which sets the trial's split.", metavar="FILE",
-        ),
-    ] = None,
-    skip_unknown: Annotated[
-        bool,
-        typer.Option(
-            "--skip-unknown",
-            help="AEDAT4: leave out streams of a type tactile does not read (poses, bounding "
-            "boxes, ...), with a note; without it such a file is refused."
-            + _formats("skip_unknown"),
-        ),
-    ] = False,
-    sort_stamps: Annotated[
-        bool,
-        typer.Option(
-            "--sort-stamps",
-            help="Robot recordings: sort the samples and frames of a stream whose stamps go "
-            "back (without it such a stream is refused, with the count)." + _formats("sort_stamps"),
-        ),
-    ] = False,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (with "
-                                            "--out-dir: ingest up-to-date inputs again).")
-                         ] = False,
+    inputs: Annotated[list[Path], typer.Argument(
+        help="Raw recordings: files or folders.", metavar="INPUT", show_default=False)],
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Output HDF5 file (all inputs into one).", metavar="FILE",
+        show_default=False)] = None,
+    out_dir: Annotated[Path | None, typer.Option(
+        "--out-dir", help="Folder for one HDF5 file per input, FOLDER/<input stem>.h5, ingested "
+        "on Dask; outputs newer than their inputs are skipped (unless --overwrite); a failed "
+        "input does not stop the others (exit 2).", metavar="FOLDER", show_default=False)] = None,
+    fmt: Annotated[str, typer.Option(
+        "--format", "-f", help=_format_help(), metavar="NAME")] = "auto",
+    mapping: Annotated[Path | None, typer.Option(
+        help="YAML mapping file for sensor CSVs (see configs/mapping_example.yaml) or the "
+        "topics of a ROS bag/MCAP (configs/rosbag_tactile_rig.yaml)." + _formats("mapping"),
+        metavar="FILE")] = None,
+    label: Annotated[list[str] | None, typer.Option(
+        "--label", "-l", help="key=value label added to every trial; repeatable.",
+        metavar="KEY=VALUE")] = None,
+    width: Annotated[int | None, typer.Option(
+        help="Event sensor width in px (CSV/NPY events; checked against AEDAT4 files and "
+        "frames)." + _formats("width_px"))] = None,
+    height: Annotated[int | None, typer.Option(
+        help="Event sensor height in px (CSV/NPY events; checked against AEDAT4 files and "
+        "frames)." + _formats("height_px"))] = None,
+    sensor: Annotated[str | None, typer.Option(
+        help="Sensor name to record (default from the input)." + _formats("sensor_name"))] = None,
+    option: Annotated[list[str] | None, typer.Option(
+        "--option", "-O", help=_option_help(), metavar="KEY=VALUE")] = None,
+    fps: Annotated[float | None, typer.Option(
+        min=0.001, metavar="HZ", help="Frame rate of image folders without a timestamps.csv "
+        "(default: 30 Hz assumed, with a note)." + _formats("frame_rate_hz"))] = None,
+    reference: Annotated[str | None, typer.Option(
+        "--reference", metavar="first|NAME", help="Image folders: the no-contact reference "
+        "frame of every folder: 'first' (the first frame in natural order, kept as frame 0) "
+        "or a file name or stem in each folder (default: the file named reference, ref, "
+        "background or no_contact)." + _formats("reference"))] = None,
+    px_per_mm: Annotated[float | None, typer.Option(
+        "--px-per-mm", min=0.0, metavar="PX", help="Image folders: pixels per millimetre on "
+        "the gel (DIGIT-like: 16), stored as the sensor attribute px_per_mm for calibration "
+        "and height maps." + _formats("px_per_mm"))] = None,
+    trials_from: Annotated[Path | None, typer.Option(
+        "--trials-from", metavar="FILE", help="Robot recordings: CSV of trial time ranges "
+        "(start_s,end_s[,trial,labels...], seconds from the recording's first message)."
+        + _formats("trials_from"))] = None,
+    annotations: Annotated[Path | None, typer.Option(
+        help="CSV of time intervals per trial (columns trial,start_s,end_s,label), stored as "
+        "/trials/<trial>/annotations.", metavar="FILE")] = None,
+    trial_labels: Annotated[Path | None, typer.Option(
+        help="CSV with a 'trial' column; every other column becomes a label of that trial "
+        "(numbers as numbers, empty cells skipped), except 'split' (train, val or test), "
+        "which sets the trial's split.", metavar="FILE")] = None,
+    skip_unknown: Annotated[bool, typer.Option(
+        "--skip-unknown", help="AEDAT4: leave out streams of a type tactile does not read "
+        "(poses, bounding boxes, ...), with a note; without it such a file is refused."
+        + _formats("skip_unknown"))] = False,
+    sort_stamps: Annotated[bool, typer.Option(
+        "--sort-stamps", help="Robot recordings: sort the samples and frames of a stream whose "
+        "stamps go back (without it such a stream is refused, with the count)."
+        + _formats("sort_stamps"))] = False,
+    overwrite: Annotated[bool, typer.Option(
+        help="Replace an existing output file (with --out-dir: ingest up-to-date inputs "
+        "again).")] = False,
     scheduler: OutDirScheduler = None,
     workers: OutDirWorkers = None,
-    as_json: Annotated[bool, typer.Option("--json", help="--out-dir: print every input's "
-                                          "status as JSON.")] = False,
-    compression: Annotated[
-        int,
-        typer.Option(
-            min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed."
-        ),
-    ] = 1,
+    as_json: Annotated[bool, typer.Option(
+        "--json", help="--out-dir: print every input's status as JSON.")] = False,
+    compression: Annotated[int, typer.Option(
+        min=-1, max=9, help="gzip level 0-9 for data datasets; -1 stores them uncompressed.")] = 1,
     progress: ProgressOption = None,
 ) -> None:
     """Ingest raw recordings into one validated tactile HDF5 file (trials as groups).
@@ -212,11 +148,14 @@ def ingest_command(
                    "trials_from": trials_from, "sort_stamps": sort_stamps or None}
         options = parse_options(option or [], flagged)
         level = Compression(None if compression < 0 else compression)
-        if out_dir is not None:
-            _ingest_each(inputs, out_dir, fmt=fmt, options=options, labels=labels,
-                         annotations=annotations, trial_labels=trial_labels,
-                         overwrite=overwrite, compression=level, scheduler=scheduler,
-                         workers=workers, as_json=as_json, progress=progress)
+        if out_dir is not None:  # one file per input on Dask, a line per input; exit 2 on a failure
+            from ..ingest.batch import ingest_each
+
+            run_file_batch("ingest", lambda **printing: ingest_each(
+                inputs, out_dir, format=fmt, options=options, labels=labels,
+                annotations=annotations, trial_labels=trial_labels, overwrite=overwrite,
+                compression=level, scheduler=scheduler, workers=workers, **printing),
+                progress=progress, as_json=as_json, flags=FLAGS, todo="to ingest")
             return
         assert out is not None
         with RichProgress(enabled=progress) as bar:
@@ -231,26 +170,4 @@ def ingest_command(
 
 def _print_note(note: str) -> None:
     """A library note as one ``tactile: note:`` line on stderr, arguments spelt as flags."""
-    print(f"tactile: note: {to_flags(note, {**COMMON_FLAGS, **FLAGS})}", file=sys.stderr)
-
-
-def _ingest_each(inputs: list[Path], out_dir: Path, *, fmt: str, options: dict[str, Any],
-                 labels: dict[str, str | int | float], annotations: Path | None,
-                 trial_labels: Path | None, overwrite: bool, compression: Compression,
-                 scheduler: str | None, workers: int | None, as_json: bool,
-                 progress: bool | None) -> None:
-    """``--out-dir``: one file per input on Dask, a line per finished input, a summary
-    line; exit 2 when an input failed (after the others are written)."""
-    from ..ingest.batch import ingest_each
-    from ._batch import FileBatchPrinter, finish_batch
-
-    table = {**COMMON_FLAGS, **FLAGS}
-    printer = FileBatchPrinter("ingest", progress=progress, todo="to ingest",
-                               flags=lambda text: to_flags(text, table))
-    with printer.running():
-        result = ingest_each(inputs, out_dir, format=fmt, options=options, labels=labels,
-                             annotations=annotations, trial_labels=trial_labels,
-                             overwrite=overwrite, compression=compression,
-                             scheduler=scheduler, workers=workers, on_plan=printer.on_plan,
-                             on_progress=printer.on_progress, on_item=printer.on_item)
-    finish_batch(result, as_json=as_json)
+    print(f"tactile: note: {spell(note, FLAGS)}", file=sys.stderr)

@@ -13,10 +13,7 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"source": "--source", "model_run": "--model", "mesh": "--mesh",
-                          "hold_s": "--hold-s", "motion_s": "--motion-s",
-                          "threshold": "--threshold", "n_static": "--n-static",
-                          "trials": "--trial", "plot": "--plot"}
+FLAGS: dict[str, Flag] = {"model_run": "--model", "trials": "--trial"}
 
 
 def _ingest_frames(inputs: Path, out: Path, options: dict[str, Any]) -> Path:
@@ -30,20 +27,17 @@ def _ingest_frames(inputs: Path, out: Path, options: dict[str, Any]) -> Path:
 
 
 def monitor_command(
-    file: Annotated[Path, typer.Argument(help="Tactile HDF5 file of visuotactile trials "
-                                         "(ingested image-sequence folders), or a folder of "
-                                         "frames: an image-sequence folder, a folder of them, "
-                                         "or a scene folder of tactile simulate "
-                                         "digit-avoidance / digit-press (its labels, "
-                                         "annotations and px_per_mm are used).",
-                                         metavar="INPUT", show_default=False)],
+    file: Annotated[Path, typer.Argument(
+        help="Tactile HDF5 file of visuotactile trials (ingested image-sequence folders), or a "
+        "folder of frames: an image-sequence folder, a folder of them, or a scene folder of "
+        "tactile simulate digit-avoidance / digit-press (its labels, annotations and px_per_mm "
+        "are used).", metavar="INPUT", show_default=False)],
     source: Annotated[str, typer.Option("--source", help="Slip-signal source: intensity "
                                         "(colour change from the reference, no model) or "
                                         "height (needs --model).")] = "intensity",
-    model: Annotated[Path | None, typer.Option("--model", help="Run folder of a trained "
-                                               "normal network (tactile train "
-                                               "configs/train_mlp_normals.yaml), for "
-                                               "--source height.", metavar="RUN")] = None,
+    model: Annotated[Path | None, typer.Option(
+        "--model", help="Run folder of a trained normal network (tactile train "
+        "configs/train_mlp_normals.yaml), for --source height.", metavar="RUN")] = None,
     mesh: Annotated[str, typer.Option("--mesh", help="Tactile mesh COLSxROWS (paper: 32x24).",
                                       metavar="COLSxROWS")] = "32x24",
     hold_s: Annotated[float, typer.Option("--hold-s", help="Seconds without a slip before the "
@@ -58,10 +52,9 @@ def monitor_command(
                                           "averaged by the adaptive threshold.")] = 30,
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", help="Replay only this trial (repeatable).", metavar="NAME")] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", help="Write one PNG per trial (signal, "
-                                              "threshold, modes, commands; like Fig. 14) "
-                                              "into this folder (created).",
-                                              metavar="FOLDER")] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Write one PNG per trial (signal, threshold, modes, commands; like Fig. "
+        "14) into this folder (created).", metavar="FOLDER")] = None,
     overwrite: Annotated[bool, typer.Option(
         help="Empty the --plot folder first (default: add the PNGs to it, replacing "
         "same-named ones).")] = False,

@@ -13,36 +13,23 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {
-    "out": "--out",
-    "flat_per_press": "--flat-per-press",
-    "seed": "--seed",
-    "overwrite": "--overwrite",
-    "plot_dir": "--plot",
-}
+FLAGS: dict[str, Flag] = {"plot_dir": "--plot"}
 
 
 def normal_labels_command(
-    calibration: Annotated[
-        Path, typer.Argument(help="Ingested ball-bearing presses (one trial each, labels "
-                             "ball_radius_mm, sensor attribute px_per_mm).", metavar="FILE",
-                             show_default=False)
-    ],
-    out: Annotated[
-        Path, typer.Option("--out", "-o", help="Output pixel table (tactile HDF5).",
-                           metavar="FILE", show_default=False)
-    ],
-    flat_per_press: Annotated[
-        int, typer.Option("--flat-per-press", min=0, help="Flat pixels (outside the contact "
-                          "circle) kept per press, drawn at random; the rest are left out and "
-                          "counted in the output.")
-    ] = 3000,
+    calibration: Annotated[Path, typer.Argument(
+        help="Ingested ball-bearing presses (one trial each, labels ball_radius_mm, sensor "
+        "attribute px_per_mm).", metavar="FILE", show_default=False)],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", help="Output pixel table (tactile HDF5).", metavar="FILE",
+        show_default=False)],
+    flat_per_press: Annotated[int, typer.Option(
+        "--flat-per-press", min=0, help="Flat pixels (outside the contact circle) kept per "
+        "press, drawn at random; the rest are left out and counted in the output.")] = 3000,
     seed: Annotated[int, typer.Option(min=0, help="Seed of the flat-pixel subsample.")] = 0,
-    plot: Annotated[
-        Path | None, typer.Option("--plot", help="Also write FOLDER/circles.png: every press "
-                                  "with its fitted circle (and the scene's true one).",
-                                  metavar="FOLDER", show_default=False)
-    ] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Also write FOLDER/circles.png: every press with its fitted circle (and "
+        "the scene's true one).", metavar="FOLDER", show_default=False)] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing output file (and "
                                             "--plot folder).")] = False,
     as_json: JsonOption = False,

@@ -13,57 +13,36 @@ from ._options import data_files, runs_and_files
 from ._output import echo_json, print_blocks, warn
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {
-    "run_dirs": "RUN",
-    "data_paths": "--data FILE...",
-    "split": "--split",
-    "threshold": "--threshold",
-    "levels": "--levels",
-    "out_dir": "--out",
-    "out": "--out",
-    "name": "--name",
-    "seed": "--seed",
-}
+FLAGS: dict[str, Flag] = {"run_dirs": "RUN", "data_paths": "--data FILE...", "out_dir": "--out"}
 
 
 def perturb_command(
     ctx: typer.Context,
-    runs: Annotated[
-        list[Path], typer.Argument(help="Run folder(s) written by `tactile train`. A path that "
-                                   "is a file is taken as a data file (so `--data *.h5` "
-                                   "works).", metavar="RUN", show_default=False)],
-    data: Annotated[
-        list[Path] | None,
-        typer.Option("--data", "-d", help="Tactile HDF5 file(s) to evaluate on (perturbed in "
-                     "memory; the files are never changed).", metavar="FILE",
-                     show_default=False),
-    ] = None,
-    kinds: Annotated[
-        str, typer.Option(help="Comma-separated: noise, lowpass, drop (events for event "
-                          "counts, samples otherwise), drop_events, drop_samples, scale.")
-    ] = "noise,lowpass,drop,scale",
-    levels: Annotated[
-        list[str] | None,
-        typer.Option("--levels", help="KIND=V1,V2,... (repeatable): noise SNR in dB, lowpass "
-                     "cut-off as a fraction of Nyquist, drop fraction, scale time factor.",
-                     metavar="KIND=V1,V2", show_default=False),
-    ] = None,
-    threshold: Annotated[
-        str, typer.Option(help="Accuracy below which a level is broken: a factor of the clean "
-                          "accuracy (0.9x) or an accuracy (0.95 or 95%).")
-    ] = "0.9x",
+    runs: Annotated[list[Path], typer.Argument(
+        help="Run folder(s) written by `tactile train`. A path that is a file is taken as a data "
+        "file (so `--data *.h5` works).", metavar="RUN", show_default=False)],
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", "-d", help="Tactile HDF5 file(s) to evaluate on (perturbed in memory; the "
+        "files are never changed).", metavar="FILE", show_default=False)] = None,
+    kinds: Annotated[str, typer.Option(
+        help="Comma-separated: noise, lowpass, drop (events for event counts, samples "
+        "otherwise), drop_events, drop_samples, scale.")] = "noise,lowpass,drop,scale",
+    levels: Annotated[list[str] | None, typer.Option(
+        "--levels", help="KIND=V1,V2,... (repeatable): noise SNR in dB, lowpass cut-off as a "
+        "fraction of Nyquist, drop fraction, scale time factor.", metavar="KIND=V1,V2",
+        show_default=False)] = None,
+    threshold: Annotated[str, typer.Option(
+        help="Accuracy below which a level is broken: a factor of the clean accuracy (0.9x) or "
+        "an accuracy (0.95 or 95%).")] = "0.9x",
     split: Annotated[str, typer.Option(help="all or test (as `tactile evaluate`).")] = "all",
     seed: Annotated[int, typer.Option(help="Seed of the random perturbations.")] = 0,
-    name: Annotated[
-        str | None,
-        typer.Option(help="Results folder RUN/perturb/<name> (default from the data file "
-                     "names).", show_default=False),
-    ] = None,
-    out: Annotated[
-        Path | None,
-        typer.Option("--out", "-o", help="Folder for the combined chart of all runs "
-                     "(perturb.png, .csv, .json).", metavar="FOLDER", show_default=False),
-    ] = None,
+    name: Annotated[str | None, typer.Option(
+        help="Results folder RUN/perturb/<name> (default from the data file names).",
+        show_default=False)] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o",
+        help="Folder for the combined chart of all runs (perturb.png, .csv, .json).",
+        metavar="FOLDER", show_default=False)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print perturb.json to stdout.")
                        ] = False,
 ) -> None:

@@ -10,17 +10,15 @@ import typer
 from ._errors import Flag, run_guarded
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"out": "--out", "max_trials": "--max-trials"}
+FLAGS: dict[str, Flag] = {}
 
 
 def plot_command(
     files: Annotated[list[Path], typer.Argument(help="Tactile HDF5 files.", metavar="FILE",
                                                 show_default=False)],
-    out: Annotated[
-        Path,
-        typer.Option("--out", "-o", help="Folder for the PNGs and index.html.", metavar="FOLDER",
-                     show_default=False),
-    ],
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", help="Folder for the PNGs and index.html.", metavar="FOLDER",
+        show_default=False)],
     max_trials: Annotated[int, typer.Option(min=1, help="Trials drawn per file.")] = 4,
 ) -> None:
     """Quick-look figures of each file (events per 20 ms, signals with labels, frames) and

@@ -13,50 +13,33 @@ from ._options import data_files, runs_and_files
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
 FLAGS: dict[str, Flag] = {
-    "run_dirs": "RUN folders",
-    "data_paths": "--data FILE",
-    "figure_dirs": "--figures DIR",
-    "out_dir": "--out",
-    "metric": "--metric",
-    "margin_pp": "--margin",
+    "run_dirs": "RUN folders", "data_paths": "--data FILE", "figure_dirs": "--figures DIR",
+    "out_dir": "--out", "margin_pp": "--margin",
 }
 
 
 def report_command(
     ctx: typer.Context,
-    runs: Annotated[
-        list[Path] | None,
-        typer.Argument(help="Run folders written by `tactile train`. A path that is a file is "
-                       "taken as a data file (so `--data *.h5` works).", metavar="RUN",
-                       show_default=False),
-    ] = None,
-    out: Annotated[
-        Path | None,
-        typer.Option("--out", "-o", help="Folder for index.html and report.json.",
-                     show_default=False, metavar="FOLDER"),
-    ] = None,
-    data: Annotated[
-        list[Path] | None,
-        typer.Option("--data", "-d", help="Tactile HDF5 file(s) to summarise.",
-                     show_default=False, metavar="FILE"),
-    ] = None,
-    figures: Annotated[
-        list[Path] | None,
-        typer.Option("--figures", help="Folder whose PNG files (recursively) are added, "
-                     "grouped by what they show and captioned in words (many of one kind: "
-                     "one grid with the count); repeatable.", show_default=False,
-                     metavar="FOLDER"),
-    ] = None,
+    runs: Annotated[list[Path] | None, typer.Argument(
+        help="Run folders written by `tactile train`. A path that is a file is taken as a data "
+        "file (so `--data *.h5` works).", metavar="RUN", show_default=False)] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Folder for index.html and report.json.", show_default=False,
+        metavar="FOLDER")] = None,
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", "-d", help="Tactile HDF5 file(s) to summarise.", show_default=False,
+        metavar="FILE")] = None,
+    figures: Annotated[list[Path] | None, typer.Option(
+        "--figures", help="Folder whose PNG files (recursively) are added, grouped by what they "
+        "show and captioned in words (many of one kind: one grid with the count); repeatable.",
+        show_default=False, metavar="FOLDER")] = None,
     title: Annotated[str | None, typer.Option(help="Page title.", show_default=False)] = None,
-    margin: Annotated[
-        float, typer.Option(min=0.0, help="Accuracy margin (percentage points) of the "
-                            "comparison.")
-    ] = 0.5,
-    metric: Annotated[
-        str, typer.Option(help="Score of the comparison: auto (per-trial accuracy where every "
-                          "run votes per trial, e.g. texture; else accuracy per window), "
-                          "accuracy, macro_f1, trial_accuracy or f1:<class>.")
-    ] = "auto",
+    margin: Annotated[float, typer.Option(
+        min=0.0, help="Accuracy margin (percentage points) of the comparison.")] = 0.5,
+    metric: Annotated[str, typer.Option(
+        help="Score of the comparison: auto (per-trial accuracy where every run votes per trial, "
+        "e.g. texture; else accuracy per window), accuracy, macro_f1, trial_accuracy or "
+        "f1:<class>.")] = "auto",
 ) -> None:
     """Write one self-contained HTML page (figures embedded): where every number comes
     from (each result tagged recorded, simulated or synthetic, recorded data first), the

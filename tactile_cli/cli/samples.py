@@ -12,10 +12,8 @@ from ._errors import run_guarded
 
 
 def samples_command(
-    out: Annotated[
-        Path, typer.Argument(help="Folder to write the sample recordings into.", metavar="FOLDER",
-                             show_default=False)
-    ],
+    out: Annotated[Path, typer.Argument(
+        help="Folder to write the sample recordings into.", metavar="FOLDER", show_default=False)],
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same files).")] = 0,
     n_events: Annotated[int, typer.Option(min=1, help="Events per event recording.")] = 200_000,
 ) -> None:

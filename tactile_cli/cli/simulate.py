@@ -17,7 +17,7 @@ from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 #: How these commands spell the library arguments their errors name (each adds its own).
-FLAGS: dict[str, Flag] = {"seed": "--seed", "config": "--config"}
+FLAGS: dict[str, Flag] = {}
 
 app = typer.Typer(
     name="simulate",
@@ -136,11 +136,9 @@ def vibrotouch_command(
     config: ConfigOption = None,
     seed: SeedOption = 0,
     contact_trials: Annotated[int | None, typer.Option(
-        "--contact-trials", min=0, help="Override contact_trials (gripper-object trials).")
-    ] = None,
+        "--contact-trials", min=0, help="Override contact_trials (gripper-object trials).")] = None,
     touch_trials: Annotated[int | None, typer.Option(
-        "--touch-trials", min=0, help="Override touch_trials (trials of 5 human touches).")
-    ] = None,
+        "--touch-trials", min=0, help="Override touch_trials (trials of 5 human touches).")] = None,
     overwrite: OverwriteOption = False,
     as_json: JsonOption = False,
     progress: ProgressOption = None,

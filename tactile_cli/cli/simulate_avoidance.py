@@ -13,8 +13,7 @@ from ._options import JsonOption, OverwriteOption, SceneConfigOption, SeedOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"seed": "--seed", "objects": "--object",
-                          "interferences": "--interferences"}
+FLAGS: dict[str, Flag] = {"objects": "--object"}
 
 
 def digit_avoidance_command(

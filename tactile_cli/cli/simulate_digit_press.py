@@ -14,37 +14,27 @@ from ._options import JsonOption, OverwriteOption, SceneConfigOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"seed": "--seed", "overwrite": "--overwrite",
-                          "presses": "--calibration-presses", "per_object": "--trials",
-                          "objects": "--objects"}
+FLAGS: dict[str, Flag] = {"presses": "--calibration-presses", "per_object": "--trials"}
 
 
 def digit_press_command(
-    out_arg: Annotated[
-        Path | None, typer.Argument(help="Output folder (created).", metavar="FOLDER",
-                                    show_default=False)
-    ] = None,
-    out: Annotated[
-        Path | None, typer.Option("--out", "-o", help="Output folder (same as OUT).",
-                                  metavar="FOLDER", show_default=False)
-    ] = None,
+    out_arg: Annotated[Path | None, typer.Argument(
+        help="Output folder (created).", metavar="FOLDER", show_default=False)] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Output folder (same as OUT).", metavar="FOLDER", show_default=False
+    )] = None,
     config: SceneConfigOption = None,
     seed: Annotated[int, typer.Option(min=0, help="Random seed; fixes every output byte "
                                       "and this unit's lighting.")] = 0,
-    calibration_presses: Annotated[
-        int | None, typer.Option("--calibration-presses", min=0,
-                                 help="Override calibration.presses (ball-bearing presses).")
-    ] = None,
-    trials: Annotated[
-        int | None, typer.Option("--trials", min=0, help="Override trials.per_object: trials "
-                                 "per object (the first holds still, the others slip; 0: "
-                                 "calibration presses only).")
-    ] = None,
-    objects: Annotated[
-        str | None, typer.Option("--objects", help="Override trials.objects, comma-separated "
-                                 "(cable, box, fabric, hex_key_small, hex_key_medium, "
-                                 "hex_key_large).", metavar="NAMES")
-    ] = None,
+    calibration_presses: Annotated[int | None, typer.Option(
+        "--calibration-presses", min=0, help="Override calibration.presses (ball-bearing presses)."
+    )] = None,
+    trials: Annotated[int | None, typer.Option(
+        "--trials", min=0, help="Override trials.per_object: trials per object (the first holds "
+        "still, the others slip; 0: calibration presses only).")] = None,
+    objects: Annotated[str | None, typer.Option(
+        "--objects", help="Override trials.objects, comma-separated (cable, box, fabric, "
+        "hex_key_small, hex_key_medium, hex_key_large).", metavar="NAMES")] = None,
     overwrite: OverwriteOption = False,
     as_json: JsonOption = False,
     progress: ProgressOption = None,

@@ -12,8 +12,7 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"folds": "--folds", "out": "--out", "plot": "--plot",
-                          "config": "--config"}
+FLAGS: dict[str, Flag] = {}
 
 
 def slip_interface_command(
@@ -28,10 +27,9 @@ def slip_interface_command(
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write the result as "
                                              "JSON (with provenance) to this file.",
                                              metavar="FILE")] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", help="Write the features against "
-                                              "frequency, mean and 1 s.d. per slip type, "
-                                              "as a PNG (like Fig. 12).", metavar="FILE")
-                    ] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Write the features against frequency, mean and 1 s.d. per slip type, as "
+        "a PNG (like Fig. 12).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     as_json: JsonOption = False,
     progress: ProgressOption = None,

@@ -14,9 +14,7 @@ from ._options import JsonOption
 from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
-FLAGS: dict[str, Flag] = {"source": "--source", "run_dir": "--model", "mesh": "--mesh",
-                          "scale": "--scale", "n_static": "--n-static", "trials": "--trial",
-                          "px_per_mm": "--px-per-mm", "workers": "--workers", "plot": "--plot"}
+FLAGS: dict[str, Flag] = {"run_dir": "--model", "trials": "--trial"}
 
 
 def slip_signal_command(

@@ -14,13 +14,7 @@ from ._options import DeviceOption
 from ._output import Progress, echo_json
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {
-    "train_data": "--data",
-    "eval_data": "--eval-data",
-    "out": "--out",
-    "device": "--device",
-    **BATCH_FLAGS,
-}
+FLAGS: dict[str, Flag] = {"train_data": "--data", **BATCH_FLAGS}
 SweepScheduler = scheduler_option("")
 SweepWorkers = workers_option("", unit="run")
 
@@ -28,23 +22,16 @@ SweepWorkers = workers_option("", unit="run")
 def sweep_command(
     config: Annotated[Path, typer.Argument(help="Sweep file (YAML, see configs/sweep_vibro.yaml).",
                                            show_default=False, metavar="CONFIG")],
-    out: Annotated[
-        Path, typer.Option("--out", "-o", help="Folder for sweep.json, table.csv/.md, "
-                           "sweep_results.json, the figures and runs/ (a stopped sweep "
-                           "given the same folder skips its finished runs).",
-                           metavar="FOLDER", show_default=False)],
-    data: Annotated[
-        list[Path] | None,
-        typer.Option("--data", "-d", help="Training file(s); replace the sweep file's "
-                     "train_data. Repeat the option for several.", show_default=False,
-                     metavar="FILE"),
-    ] = None,
-    eval_data: Annotated[
-        list[Path] | None,
-        typer.Option("--eval-data", help="Evaluation file(s); replace the sweep file's "
-                     "eval.data. Repeat the option for several.", show_default=False,
-                     metavar="FILE"),
-    ] = None,
+    out: Annotated[Path, typer.Option(
+        "--out", "-o", help="Folder for sweep.json, table.csv/.md, sweep_results.json, the "
+        "figures and runs/ (a stopped sweep given the same folder skips its finished runs).",
+        metavar="FOLDER", show_default=False)],
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", "-d", help="Training file(s); replace the sweep file's train_data. Repeat the "
+        "option for several.", show_default=False, metavar="FILE")] = None,
+    eval_data: Annotated[list[Path] | None, typer.Option(
+        "--eval-data", help="Evaluation file(s); replace the sweep file's eval.data. Repeat the "
+        "option for several.", show_default=False, metavar="FILE")] = None,
     scheduler: SweepScheduler = None,
     workers: SweepWorkers = None,
     overwrite: Annotated[bool, typer.Option(help="Run every run again, and write into a "
@@ -52,12 +39,9 @@ def sweep_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print sweep_results as JSON.")
                        ] = False,
     device: DeviceOption = "auto",
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress",
-                     help="Show a progress bar (default: when stderr is a terminal; otherwise "
-                     "one line per finished run on stderr).", show_default=False),
-    ] = None,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", help="Show a progress bar (default: when stderr is a "
+        "terminal; otherwise one line per finished run on stderr).", show_default=False)] = None,
 ) -> None:
     """Train and evaluate every model x window x channel set of a sweep file on Dask, then
     write one table (CSV, markdown, JSON), accuracy against window size (paper 001, Fig. 8)

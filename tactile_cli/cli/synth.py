@@ -8,12 +8,11 @@ from typing import Annotated
 import typer
 
 from ._errors import Flag, run_guarded, seconds_as_ms
+from ._options import OverwriteOption
 from .progress import ProgressOption, RichProgress
 
 #: How this command spells the library arguments its errors name (see ``_errors.to_flags``).
-FLAGS: dict[str, Flag] = {"centroids": "--centroids", "seed": "--seed", "n": "--n",
-                          "bin_s": ("--bin-ms", seconds_as_ms), "out": "--out",
-                          "fits": "--fits"}
+FLAGS: dict[str, Flag] = {"bin_s": ("--bin-ms", seconds_as_ms)}
 
 
 def synth_command(
@@ -21,9 +20,8 @@ def synth_command(
                                       show_default=False)],
     fits: Annotated[Path | None, typer.Option(
         help="Tactile file with /derived/fits/fos_press and fos_slip (from `tactile fit-fos`): "
-             "parameters are drawn per force level from its converged fits. Without it, from "
-             "the config's fos section (the paper's values).", metavar="FILE",
-        show_default=False)] = None,
+        "parameters are drawn per force level from its converged fits. Without it, from the "
+        "config's fos section (the paper's values).", metavar="FILE", show_default=False)] = None,
     centroids: Annotated[Path | None, typer.Option(
         help="ROI config (configs/rois_marker_scene.yaml or a scene's scene.json): also write "
              "each trial's model-based ROI centroid trajectories as the stream roi_centroids "
@@ -33,12 +31,11 @@ def synth_command(
     seed: Annotated[int, typer.Option(min=0, help="Random seed (same seed, same trials).")] = 0,
     config: Annotated[Path | None, typer.Option(
         "--config", "-c", help="Synth config YAML (see configs/synth_fos.yaml); default: the "
-                               "built-in defaults, which that file repeats.",
-        metavar="FILE", show_default=False)] = None,
+        "built-in defaults, which that file repeats.", metavar="FILE", show_default=False)] = None,
     bin_ms: Annotated[float | None, typer.Option(
         min=0.001, help="Bin width in ms; overrides the config's bin_s.",
         show_default=False)] = None,
-    overwrite: Annotated[bool, typer.Option(help="Replace an existing output file.")] = False,
+    overwrite: OverwriteOption = False,
     progress: ProgressOption = None,
 ) -> None:
     """Model-based training trajectories (paper 000, sec. 5.1): random approach, press, slip

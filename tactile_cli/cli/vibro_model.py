@@ -11,7 +11,7 @@ from ._errors import Flag, run_guarded
 from ._options import JsonOption
 from ._output import print_result
 
-FLAGS: dict[str, Flag] = {"plot": "--plot"}
+FLAGS: dict[str, Flag] = {}
 
 
 def vibro_model_command(

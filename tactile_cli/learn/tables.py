@@ -9,40 +9,16 @@ pandas (``pd.DataFrame(t.rows, columns=t.columns)``). Nothing here computes a me
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from ..text_table import TextTable, num, pct
 
 if TYPE_CHECKING:
     from .compare import Comparison
     from .metrics import ClassificationMetrics, EvalResult
     from .perturb import PerturbResult
-
-
-@dataclass
-class TextTable:
-    """A table of formatted cells: ``columns`` (headers), ``rows`` (one list of strings
-    per row), an optional ``title`` and ``caption``; the first ``left`` columns are text
-    (left-justified), the others numbers; cells of the columns in ``fold`` may wrap."""
-
-    columns: list[str]
-    rows: list[list[str]] = field(default_factory=list)
-    title: str | None = None
-    caption: str | None = None
-    left: int = 1
-    fold: tuple[int, ...] = ()
-
-
-def pct(value: float | None) -> str:
-    """A fraction as ``12.34 %``; ``n/a`` for None or NaN."""
-    return "n/a" if value is None or math.isnan(value) else f"{100 * value:.2f} %"
-
-
-def num(value: float | None) -> str:
-    """A number to four decimals; ``n/a`` for None or NaN."""
-    return "n/a" if value is None or math.isnan(value) else f"{value:.4f}"
 
 
 # -- tactile evaluate ---------------------------------------------------------------------------

@@ -381,7 +381,51 @@ def stream_features_each(
                     workers=workers, on_progress=on_progress, on_item=on_item)
 
 
+def parse_bands(texts: Sequence[str] | None) -> dict[str, tuple[float, float]]:
+    """``["mid=100-400"]`` -> ``{"mid": (100.0, 400.0)}`` (Hz); one :class:`InputError`
+    naming ``bands_hz`` for a malformed text."""
+    bands: dict[str, tuple[float, float]] = {}
+    for text in texts or []:
+        name, sep, span = text.partition("=")
+        lo, dash, hi = span.partition("-")
+        try:
+            if not (sep and dash and name.strip()):
+                raise ValueError
+            bands[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError(f"`bands_hz` {text!r}: give NAME=LOW-HIGH in Hz, e.g. "
+                             "mid=100-400") from None
+    return bands
+
+
+def check_feature_modes(files: Sequence[Path], *, out: Path | None, out_dir: Path | None,
+                        stream: str | None, scheduler: str | None = None,
+                        workers: int | None = None, groups: Sequence[str] | None = None,
+                        bands_hz: Sequence[str] | None = None,
+                        config: Path | None = None) -> None:
+    """Which arguments of a features run go together, refused in one line before any
+    work: one input into ``out``, or several into ``out_dir`` (a stream's features only:
+    the taxel-slip layout is one file per scene); ``scheduler``/``workers`` with
+    ``out_dir``; ``groups``/``bands_hz`` with a ``stream``; ``config`` (the taxel-slip
+    layout's) without one."""
+    if (out is None) == (out_dir is None):
+        raise InputError("give `out` (one input) or `out_dir` (one file per input)")
+    if out_dir is not None and stream is None:
+        raise InputError("`out_dir` goes with `stream` (the taxel-slip layout is one file "
+                         "per scene: `out`)")
+    if out is not None and len(files) > 1:
+        raise InputError("`out` takes one input; give `out_dir` for several", path=files[1])
+    if out is not None and (scheduler is not None or workers is not None):
+        raise InputError("`scheduler` and `workers` go with `out_dir` (one task per file)")
+    if stream is None and (groups or bands_hz):
+        raise InputError("`groups` and `bands_hz` go with `stream`")
+    if stream is not None and config is not None:
+        raise InputError("`config` is the taxel-slip layout's; with `stream` give `window_s`, "
+                         "`hop_s`, `nperseg`, `bands_hz` and `groups`")
+
+
 __all__ = ["FEATURE_STREAM", "FeatureSensor", "FeatureStreamWritten", "FeatureTrial",
-           "StreamFeaturesResult", "channel_groups", "named_bins", "stream_features_each",
+           "StreamFeaturesResult", "channel_groups", "check_feature_modes", "named_bins",
+           "parse_bands", "stream_features_each",
            "stream_features_task", "window_plan", "write_feature_stream",
            "write_stream_features"]

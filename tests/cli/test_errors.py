@@ -116,3 +116,26 @@ def test_run_guarded_spells_overwrite_everywhere_and_other_names_from_the_table(
         run_guarded(body, flags={"threshold": "--threshold"})
     assert capsys.readouterr().err == ("tactile: error: --threshold (=2) must be in [0, 1]; or "
                                        "pass --overwrite\n")
+
+
+def test_an_argument_named_like_an_option_is_spelt_without_a_table_entry():
+    """``spell`` reads the running command's options: `max_steps` -> --max-steps, a switch
+    as its flag, a name the command lacks left as the library wrote it, and a FLAGS entry
+    (a library name that differs from the option's) still wins."""
+    import typer
+
+    from tactile_cli.cli._errors import spell
+
+    demo = typer.Typer()
+
+    @demo.command()
+    def go(max_steps: int = 3, dry_run: bool = typer.Option(False, "--dry-run"),
+           bin_ms: float = 20.0) -> None:
+        typer.echo(spell("`max_steps=0` is too few; `dry_run=True` or `bin_s=0.02`; "
+                         "`unknown=1` stays", {"bin_s": ("--bin-ms", seconds_as_ms)}))
+
+    res = runner.invoke(demo, [])
+    assert res.exit_code == 0, res.output
+    assert res.output.strip() == ("--max-steps 0 is too few; --dry-run or --bin-ms 20; "
+                                  "`unknown=1` stays")
+    assert spell("`max_steps=0`") == "`max_steps=0`"  # outside a command: no options known

@@ -213,3 +213,18 @@ def test_real_fabric_files_with_one_repeated_stamp(tmp_path):
         assert sig["data"].shape == (1059, 16) and sig.attrs["stamps_repeated"] == 1
         assert np.all(np.diff(sig["t_s"][()]) > 0)
         assert f["trials/WovenFabric_F150_V-120mmps_0/signals/fingertip/data"].shape == (177, 16)
+
+
+def test_shipped_fabric_mapping_keeps_the_files_with_a_repeated_stamp(tmp_path):
+    """configs/fabric_slide.yaml names the policy the set needs: its two files with one
+    repeated stamp ingest (the first sample of the stamp kept), with the set's labels."""
+    root = shared_path("fabric_slide")
+    files = [root / "BeigeCotton_F120_V20mmps_0.csv", root / "WovenFabric_F150_V-120mmps_0.csv"]
+    mapping = Path(__file__).resolve().parents[2] / "configs" / "fabric_slide.yaml"
+    out = ingest(files, tmp_path / "fabric.h5", options={"mapping": mapping})
+    with h5py.File(out) as f:
+        sig = f["trials/BeigeCotton_F120_V20_0/signals/cpm"]
+        assert sig["data"].shape == (1059, 17) and sig.attrs["stamps_dropped"] == 1
+        labels = f["trials/WovenFabric_F150_V-120_0/labels"].attrs
+        assert (labels["fabric"], labels["force"], labels["speed"], labels["rep"]) == \
+            ("WovenFabric", "150", "-120", "0")

@@ -84,7 +84,7 @@ def test_stream_options_are_checked(recording, tmp_path):
         (["--stream", "accel", "--group", "a_x"], "a_x is one channel"),
         (["--stream", "accel", "--band", "low"], "give NAME=LOW-HIGH"),
         (["--stream", "nope"], "no trial has a stream 'nope'"),
-        (["--group", "a_*"], "--group and --band go with --stream NAME"),
+        (["--group", "a_*"], "--group and --band go with --stream"),
     ]
     for args, message in cases:
         res = runner.invoke(app, ["features", "spectral", str(recording), "--out", out, *args])
@@ -130,10 +130,10 @@ def test_many_files_on_a_worker_equal_one_file_runs(recording, tmp_path):
 
 def test_out_or_out_dir(recording, tmp_path):
     res = runner.invoke(app, ["features", "spectral", str(recording)])
-    assert res.exit_code == 2 and "give --out FILE (one input) or --out-dir" in res.stderr
+    assert res.exit_code == 2 and "give --out (one input) or --out-dir" in res.stderr
     res = runner.invoke(app, ["features", "spectral", str(recording), "--out-dir",
                               str(tmp_path / "f")])
-    assert res.exit_code == 2 and "--out-dir goes with --stream NAME" in res.stderr
+    assert res.exit_code == 2 and "--out-dir goes with --stream (the taxel-slip layout" in res.stderr
     res = runner.invoke(app, ["features", "spectral", str(recording), str(recording),
                               "--out", str(tmp_path / "o.h5"), "--stream", "accel"])
     assert res.exit_code == 2 and "--out takes one input" in res.stderr
