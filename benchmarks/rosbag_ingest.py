@@ -11,13 +11,23 @@ child processes (imports off the clock):
   and deserialising it (rosbags ``AnyReader`` + its typestore for bags; ``mcap``'s reader +
   the same typestore for MCAP): the floor of any ingest of these messages;
 - **tactile ingest**: ``tactile_cli.ingest.ingest`` end to end with
-  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames
-  and signals, SHA-256 of the recording, schema validation, atomic rename).
+  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames,
+  deflated in the store's thread pool, and signals, SHA-256 of the recording, schema
+  validation, atomic rename).
 
 Rates are recording bytes / wall seconds (MB = 10^6 bytes); ``ratio`` = ingest / reader
 alone (target >= 0.70); ``peak_rss_mb`` is the ingest child's ``VmHWM`` (target: well under
-1 GB for a 2 GB recording, i.e. memory that does not grow with the recording). The recording
-sits in the page cache (just written), as for both measurements.
+1 GB for a 2 GB recording, i.e. memory that does not grow with the recording);
+``reader_cpu_s``/``ingest_cpu_s`` are each child's user + system CPU seconds over all its
+threads (imports included), and ``load_avg_1min`` the machine's 1-minute load average
+before the reader and after the ingest: on a shared machine the ratio moves with the load.
+The recording sits in the page cache (just written), as for both measurements.
+
+Video (``--video-s``, default 30 s; 0 skips it): the rig's camera as an MP4
+(``write_press_video``: MPEG-4 part 2, 30 fps, the same frames size), measured the same way:
+PyAV alone demuxing, decoding and converting every frame to RGB (``to_ndarray("rgb24")``,
+what any RGB ingest needs), against ``tactile ingest`` of the video; ``video_ratio`` =
+ingest / PyAV alone, in frames per second.
 
     .venv/bin/python benchmarks/rosbag_ingest.py --mb 1024 --container ros1 --json
 """
@@ -26,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -51,7 +62,27 @@ def _peak_rss_mb() -> float:
 
 
 def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]:
-    if kind == "reader":
+    n = 0
+    if kind == "video_reader":
+        import av
+
+        start = time.perf_counter()
+        with av.open(src) as container:
+            for frame in container.decode(container.streams.video[0]):
+                frame.to_ndarray(format="rgb24")
+                n += 1
+        seconds = time.perf_counter() - start
+    elif kind == "video_ingest":
+        import av  # noqa: F401  (imports off the clock)
+
+        import tactile_cli.ingest.video  # noqa: F401
+        from tactile_cli.ingest import ingest
+        from tactile_cli.store.writer import Compression
+
+        start = time.perf_counter()
+        ingest([src], out, overwrite=True, command="benchmark", compression=Compression(level))
+        seconds = time.perf_counter() - start
+    elif kind == "reader":
         from tactile_cli.ingest.robot_recording import RobotRecording
 
         start = time.perf_counter()
@@ -74,8 +105,11 @@ def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]
         ingest([src], out, options={"mapping": MAPPING}, overwrite=True, command="benchmark",
                compression=Compression(level))
         seconds = time.perf_counter() - start
-        n = 0
-    return {"seconds": seconds, "messages": n, "peak_rss_mb": _peak_rss_mb()}
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_SELF)  # every thread's, imports included
+    return {"seconds": seconds, "messages": n, "peak_rss_mb": _peak_rss_mb(),
+            "cpu_s": usage.ru_utime + usage.ru_stime}
 
 
 def _run_child(kind: str, src: Path, out: Path, level: int | None) -> dict[str, float]:
@@ -90,6 +124,26 @@ def _size(path: Path) -> int:
             else path.stat().st_size)
 
 
+def _video(root: Path, args: argparse.Namespace, level: int | None) -> dict[str, float]:
+    """The video comparison: PyAV alone against ``tactile ingest`` of the same MP4."""
+    from tactile_cli.samples import robot
+
+    src = robot.write_press_video(root / "press.mp4", seconds=args.video_s, image_hz=IMAGE_HZ,
+                                  size_hw=IMAGE_HW, array_hz=100.0, seed=0)
+    reader = [_run_child("video_reader", src, root / "x.h5", level) for _ in range(args.repeat)]
+    tactile = [_run_child("video_ingest", src, root / "v.h5", level)
+               for _ in range(args.repeat)]
+    frames = int(reader[0]["messages"])
+    reader_s = statistics.median(r["seconds"] for r in reader)
+    ingest_s = statistics.median(r["seconds"] for r in tactile)
+    return {"video_mb": round(src.stat().st_size / 1e6, 1), "video_frames": frames,
+            "video_reader_alone_s": round(reader_s, 2), "video_ingest_s": round(ingest_s, 2),
+            "video_reader_alone_fps": round(frames / reader_s, 1),
+            "video_ingest_fps": round(frames / ingest_s, 1),
+            "video_ratio": round(reader_s / ingest_s, 3),
+            "video_peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--mb", type=float, default=256.0, help="recording size in MB")
@@ -98,6 +152,8 @@ def main() -> None:
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--compression", type=int, default=1,
                         help="gzip level of the ingest (-1: none; 1 is the CLI default)")
+    parser.add_argument("--video-s", type=float, default=30.0,
+                        help="seconds of the MP4 of the video comparison (0: skip it)")
     parser.add_argument("--child", nargs=4, metavar=("KIND", "SRC", "OUT", "LEVEL"),
                         help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -119,9 +175,13 @@ def main() -> None:
         write_s = time.perf_counter() - t0
         size = _size(src)
         level = None if args.compression < 0 else args.compression
+        load = [os.getloadavg()[0]]
         reader = [_run_child("reader", src, root / "x.h5", level) for _ in range(args.repeat)]
         tactile = [_run_child("ingest", src, root / "o.h5", level) for _ in range(args.repeat)]
+        load.append(os.getloadavg()[0])
         out_mb = (root / "o.h5").stat().st_size / 1e6
+        (root / "o.h5").unlink()
+        video = _video(root, args, level) if args.video_s > 0 else {}
     reader_s = statistics.median(r["seconds"] for r in reader)
     ingest_s = statistics.median(r["seconds"] for r in tactile)
     result = {
@@ -134,7 +194,11 @@ def main() -> None:
         "ratio": round(reader_s / ingest_s, 3),
         "peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1),
         "reader_peak_rss_mb": round(max(r["peak_rss_mb"] for r in reader), 1),
+        "reader_cpu_s": round(statistics.median(r["cpu_s"] for r in reader), 1),
+        "ingest_cpu_s": round(statistics.median(r["cpu_s"] for r in tactile), 1),
+        "load_avg_1min": [round(x, 2) for x in load],
         "output_mb": round(out_mb, 1), "compression": args.compression, "repeat": args.repeat,
+        **video,
     }
     if args.json:
         print(json.dumps(result, indent=2))

@@ -102,8 +102,8 @@ def ingest_command(
         "(poses, bounding boxes, ...), with a note; without it such a file is refused."
         + _formats("skip_unknown"))] = False,
     sort_stamps: Annotated[bool, typer.Option(
-        "--sort-stamps", help="Robot recordings: sort the samples of a stream whose stamps go "
-        "back (without it such a stream is refused, with the count)."
+        "--sort-stamps", help="Robot recordings: sort the samples and frames of a stream whose "
+        "stamps go back (without it such a stream is refused, with the count)."
         + _formats("sort_stamps"))] = False,
     overwrite: Annotated[bool, typer.Option(
         help="Replace an existing output file (with --out-dir: ingest up-to-date inputs "

@@ -16,8 +16,10 @@ topics.yaml`` makes the topics the mapping names into streams of each trial (the
 
 - **frames** (kind ``visuotactile``): ``sensor_msgs/Image`` (8-bit encodings) and
   ``CompressedImage`` (JPEG, PNG) as (height, width, 3) uint8 RGB, streamed to the file in
-  small batches; each trial's reference is its first frame or the frame at ``reference``
-  (which stays a frame of the sequence);
+  small batches; each trial's reference is its first frame, the frame at ``reference``
+  (which stays a frame of the sequence) or, when ``reference`` names an image topic, that
+  topic's latest message logged before the trial's first frame (its first message when
+  none comes that early; see :class:`~tactile_cli.ingest.topic_mapping.TopicStream`);
 - **events** (kind ``event_camera``): ``dvs_msgs/EventArray``, every event as recorded (time
   to the microsecond of the schema; a note says when a stamp had finer digits);
 - **samples** (any other kind): one row per message, the sensor's channels from the message
@@ -25,8 +27,10 @@ topics.yaml`` makes the topics the mapping names into streams of each trial (the
 
 Time: each stream takes its messages' header stamps (``time: header``, the default; log time
 for a message type without a header, or when every header stamp is 0) or their log times
-(``time: log``). Sample stamps that go back are refused with their count unless
-``sort_stamps`` (then sorted, stable); frames must not go back (use ``time: log``). Every
+(``time: log``). Stamps that go back are refused with their count unless ``sort_stamps``:
+samples are then sorted (stable) per trial; frames, which are streamed to the file, are
+sorted (stable) within a window of half a frame batch (:data:`FRAME_BATCH_BYTES`; about 18
+frames of 320x240 RGB), and a frame going back further than that is one error. Every
 stream's rate, jitter and gaps (intervals over twice the median) are returned as a note and
 kept as sensor attributes (``rate_hz`` in ``sample_rate_hz``, ``jitter_s``, ``gaps``,
 ``longest_gap_s``), beside the identity the recording and the mapping give: ``topic``,
@@ -38,6 +42,7 @@ trial's attribute ``topics_left_out``; nothing is dropped silently.
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +55,15 @@ from ..progress import Progress
 from ..store.provenance import sha256_of
 from ..store.writer import StoreWriter
 from .contract import FormatOptions, IngestFormat, RecordingSummary, StreamSummary, TrialSummary
+from .robot_messages import (
+    check_path,
+    compressed_rgb,
+    event_columns,
+    frame_id,
+    header_stamp_ns,
+    image_rgb,
+    row_reader,
+)
 from .robot_recording import (
     BAG_SUFFIX,
     MCAP_SUFFIX,
@@ -87,8 +101,8 @@ class RobotOptions(FormatOptions):
     """CSV of trial time ranges (start_s,end_s[,trial,labels...], seconds from the
     recording's first message), instead of one trial per recording or a marker topic."""
     sort_stamps: bool = False
-    """Sort the samples of a stream whose stamps go back (default: refuse, with their
-    count)."""
+    """Sort the samples and frames of a stream whose stamps go back, stable by stamp
+    (default: refuse, with their count)."""
 
 
 # -- timing ------------------------------------------------------------------------------
@@ -135,11 +149,30 @@ def check_topics(rec: RobotRecording, mapping: TopicMapping, mapping_path: Path)
         if not (stream.is_frames or stream.is_events) and kind == "sensor_msgs/CompressedImage":
             raise InputError(f"stream {stream.name}: topic {stream.topic} holds compressed "
                              "images; map it with kind visuotactile (frames)", path=mapping_path)
+        ref = stream.reference_topic
+        if ref is not None:
+            _check_reference_topic(rec, stream, ref, mapping_path)
         if stream.fields is not None:
-            from .robot_messages import check_path
-
             for path in stream.fields:
                 check_path(rec, info.msgtype, path, stream.topic)
+
+
+def _check_reference_topic(rec: RobotRecording, stream: TopicStream, ref: str,
+                           mapping_path: Path) -> None:
+    """The topic a frames stream takes its reference from exists, holds images, has a
+    message and a definition."""
+    if ref not in rec.topics:
+        raise InputError(f"stream {stream.name}: the reference topic {ref} is not in the "
+                         f"recording {rec.path}; its topics: {', '.join(rec.topics)}",
+                         path=mapping_path)
+    kind = short_type(rec.topics[ref].msgtype)
+    if kind not in ("sensor_msgs/Image", "sensor_msgs/CompressedImage"):
+        raise InputError(f"stream {stream.name}: the reference topic {ref} holds {kind}, not "
+                         "images (sensor_msgs/Image or CompressedImage)", path=mapping_path)
+    if rec.topics[ref].count == 0:
+        raise InputError(f"stream {stream.name}: the reference topic {ref} has no messages; "
+                         "give `reference: first` or a frame index", path=mapping_path)
+    rec.decoder(ref)
 
 
 def trial_spans(rec: RobotRecording, mapping: TopicMapping | None, options: RobotOptions,
@@ -194,6 +227,11 @@ class _Stream:
     sensor: str | None = None
     timing_all: list[np.ndarray] = field(default_factory=list)
     newest: int = -1  # the latest trial a message went to
+    # reference topic of a frames stream: its first message and the latest one read so far,
+    # as (index in the topic, raw bytes), in the recording being read
+    ref_first: tuple[int, bytes] | None = None
+    ref_latest: tuple[int, bytes] | None = None
+    ref_seen: int = 0
 
 
 def ingest_robot(inputs: Sequence[Path], options: RobotOptions, writer: StoreWriter,
@@ -235,8 +273,10 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
         notes += trial_notes
         sources = _sources(writer, path)
         marker = mapping.trials.marker.topic if mapping.trials.marker else None
+        refs: dict[str, list[_Stream]] = {}  # reference topic -> frames streams taking it
         left_out = [t for t in rec.topics
-                    if t not in {s.topic for s in mapping.streams} and t != marker]
+                    if t not in {s.topic for s in mapping.streams} and t != marker
+                    and t not in {s.reference_topic for s in mapping.streams}]
         left_text = "; ".join(f"{t} ({short_type(rec.topics[t].msgtype)}, "
                               f"{rec.topics[t].count} messages)" for t in left_out)
         trials = []
@@ -248,7 +288,8 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
         if left_out:
             notes.append(f"{recording_name(path)}: topics not in the mapping, left out: "
                          f"{left_text}")
-        starts = np.array([s.start_ns for s in spans], dtype=np.int64)
+        starts = [s.start_ns for s in spans]  # increasing; bisect per message (numpy's
+        # searchsorted costs ~20 us a call on one Python int, bisect well under 1 us)
         by_topic: dict[str, _Stream] = {}
         for spec in mapping.streams:
             st = streams.get(spec.name)
@@ -258,9 +299,21 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
             else:  # the next recording of a multi-recording ingest
                 st.decode, st.newest = rec.decoder(spec.topic), -1
             by_topic[spec.topic] = st
+            st.ref_first = st.ref_latest = None
+            st.ref_seen = 0
+            if spec.reference_topic is not None:
+                refs.setdefault(spec.reference_topic, []).append(st)
+                for _, _, raw in rec.raw_messages({spec.reference_topic}):
+                    st.ref_first = (0, raw)  # taken when no message precedes a trial
+                    break
         progress.start(sum(rec.topics[s.topic].count for s in mapping.streams), "messages")
-        for topic, log_ns, raw in rec.raw_messages(by_topic):
-            st = by_topic[topic]
+        for topic, log_ns, raw in rec.raw_messages(set(by_topic) | set(refs)):
+            for taker in refs.get(topic, ()):
+                taker.ref_latest = (taker.ref_seen, raw)
+                taker.ref_seen += 1
+            st = by_topic.get(topic)
+            if st is None:
+                continue
             msg = st.decode(raw)
             _take(st, msg, log_ns, mapping, rec, trials, starts, writer, options)
             progress.advance(1)
@@ -278,8 +331,6 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
 
 
 def _stamp(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping) -> int:
-    from .robot_messages import frame_id, header_stamp_ns
-
     header = header_stamp_ns(msg)
     if st.use_header is None:
         wanted = (st.spec.time or mapping.time) == "header"
@@ -289,13 +340,13 @@ def _stamp(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping) -> int:
 
 
 def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotRecording,
-          trials: list[_Trial], starts: np.ndarray, writer: StoreWriter,
+          trials: list[_Trial], starts: list[int], writer: StoreWriter,
           options: RobotOptions) -> None:
     t_ns = _stamp(st, msg, log_ns, mapping)
     if trials[0].span.takes_all:
         k = 0
     else:
-        k = int(np.searchsorted(starts, t_ns, side="right")) - 1
+        k = bisect.bisect_right(starts, t_ns) - 1
         if k < 0 or t_ns >= trials[k].span.end_ns:
             st.outside += 1
             return
@@ -307,13 +358,11 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
             _flush(st, done, trials, rec, writer, options)
     spec = st.spec
     if spec.is_frames:
-        _take_frame(st, msg, t_ns, k, index, rec, trials)
+        _take_frame(st, msg, t_ns, k, index, rec, trials, options)
     elif spec.is_events:
         _take_events(st, msg, k, rec, trials, writer)
     else:
         if st.rows is None:
-            from .robot_messages import row_reader
-
             st.rows = row_reader(rec, spec.topic, st.msgtype, msg, spec.fields)
             _check_names(st, rec)
         row = st.rows.read(msg)
@@ -344,9 +393,7 @@ def _check_names(st: _Stream, rec: RobotRecording) -> None:
 
 
 def _take_frame(st: _Stream, msg: Any, t_ns: int, k: int, index: int, rec: RobotRecording,
-                trials: list[_Trial]) -> None:
-    from .robot_messages import compressed_rgb, image_rgb
-
+                trials: list[_Trial], options: RobotOptions) -> None:
     if short_type(st.msgtype) == "sensor_msgs/CompressedImage":
         rgb = compressed_rgb(msg, st.spec.topic, index, rec)
     else:
@@ -357,38 +404,79 @@ def _take_frame(st: _Stream, msg: Any, t_ns: int, k: int, index: int, rec: Robot
         raise InputError(f"topic {st.spec.topic}, message {index}: a {rgb.shape[1]}x"
                          f"{rgb.shape[0]} px frame after {st.size_hw[1]}x{st.size_hw[0]} px "
                          "ones; a stream keeps one frame size", path=rec.path)
-    state = st.frames.setdefault(k, {"pending": [], "times": [], "appender": None, "count": 0,
-                                     "last": None})
+    state = st.frames.get(k)
+    if state is None:  # the trial's first frame: its reference message is the latest one now
+        state = st.frames[k] = {"pending": [], "times": [], "appender": None, "count": 0,
+                                "last": None, "back": 0, "written": None,
+                                "ref": st.ref_latest or st.ref_first}
     t_s = (t_ns - trials[k].span.start_ns) / 1e9
-    if state["last"] is not None and t_s < state["last"]:
-        raise InputError(f"topic {st.spec.topic}, message {index}: the frame's header stamp goes "
-                         f"back {state['last'] - t_s:.6f} s; frames keep their order: map the "
-                         "topic with `time: log`", path=rec.path)
+    went_back = state["last"] is not None and t_s < state["last"]
     state["last"] = t_s
+    st.stamps.setdefault(k, []).append(t_ns)
+    if went_back:
+        state["back"] += 1
+    if state["back"] and not options.sort_stamps:
+        return  # counted; the trial fails with the count when it is flushed
     state["pending"].append(rgb)
     state["times"].append(t_s)
     state["count"] += 1
-    st.stamps.setdefault(k, []).append(t_ns)
     ref = st.spec.reference
-    ref_index = 0 if ref == "first" else int(ref)
-    if state["appender"] is None and state["count"] > ref_index:
-        state["appender"] = trials[k].writer.frames(st.spec.name, reference=state["pending"][
-            ref_index])
-    if state["appender"] is not None and (len(state["pending"]) * rgb.nbytes
-                                          >= FRAME_BATCH_BYTES):
-        _write_frames(state)
+    ready = isinstance(ref, str) or state["count"] > (0 if ref == "first" else int(ref))
+    if ready and len(state["pending"]) * rgb.nbytes >= FRAME_BATCH_BYTES:
+        _write_frames(st, state, trials[k], rec, options, final=False)
 
 
-def _write_frames(state: dict[str, Any]) -> None:
-    if state["pending"]:
-        state["appender"].append(np.stack(state["pending"]), np.asarray(state["times"]))
-        state["pending"], state["times"] = [], []
+def _topic_reference(st: _Stream, state: dict[str, Any], rec: RobotRecording) -> np.ndarray:
+    """The (height, width, 3) uint8 reference frame a trial takes from the reference topic."""
+    topic = st.spec.reference_topic
+    assert topic is not None and state["ref"] is not None
+    index, raw = state["ref"]
+    msg = rec.decoder(topic)(raw)
+    if short_type(rec.topics[topic].msgtype) == "sensor_msgs/CompressedImage":
+        rgb = compressed_rgb(msg, topic, index, rec)
+    else:
+        rgb = image_rgb(msg, topic, index, rec)
+    if rgb.shape[:2] != st.size_hw:
+        assert st.size_hw is not None
+        raise InputError(f"stream {st.spec.name}: the reference frame (topic {topic}, message "
+                         f"{index}) is {rgb.shape[1]}x{rgb.shape[0]} px but the frames of "
+                         f"{st.spec.topic} are {st.size_hw[1]}x{st.size_hw[0]} px; a reference "
+                         "has the frames' size", path=rec.path)
+    return rgb
+
+
+def _write_frames(st: _Stream, state: dict[str, Any], trial: _Trial, rec: RobotRecording,
+                  options: RobotOptions, *, final: bool) -> None:
+    """Write the pending frames of one trial (in stamp order with ``sort_stamps``, keeping
+    the later half back until the trial ends so that frames arriving late can still be
+    sorted in)."""
+    pending, times = state["pending"], state["times"]
+    if not pending:
+        return
+    keep = 0
+    if options.sort_stamps:
+        order = np.argsort(np.asarray(times), kind="stable")
+        pending, times = [pending[i] for i in order], [times[i] for i in order]
+        keep = 0 if final else len(pending) // 2
+    if state["appender"] is None:
+        ref = st.spec.reference
+        reference = (_topic_reference(st, state, rec) if st.spec.reference_topic is not None
+                     else pending[0 if ref == "first" else int(ref)])
+        state["appender"] = trial.writer.frames(st.spec.name, reference=reference)
+    head, head_t = pending[:len(pending) - keep], times[:len(pending) - keep]
+    if state["written"] is not None and head_t[0] < state["written"]:
+        raise InputError(f"topic {st.spec.topic}, trial {trial.span.name}: a frame's stamp goes "
+                         f"back {state['written'] - head_t[0]:.6f} s, behind frames already "
+                         f"written; `sort_stamps=True` sorts frames within "
+                         f"{max(1, FRAME_BATCH_BYTES // pending[0].nbytes // 2)} frames: map "
+                         "the topic with `time: log`", path=rec.path)
+    state["appender"].append(np.stack(head), np.asarray(head_t))
+    state["written"] = head_t[-1]
+    state["pending"], state["times"] = pending[len(head):], times[len(head):]
 
 
 def _take_events(st: _Stream, msg: Any, k: int, rec: RobotRecording, trials: list[_Trial],
                  writer: StoreWriter) -> None:
-    from .robot_messages import event_columns
-
     if st.sensor is None:
         width = st.spec.width_px or int(msg.width)
         height = st.spec.height_px or int(msg.height)
@@ -418,11 +506,19 @@ def _flush(st: _Stream, k: int, trials: list[_Trial], rec: RobotRecording, write
     origin = trial.span.start_ns
     if spec.is_frames:
         state = st.frames.pop(k)
-        if state["appender"] is None:
+        if state["back"] and not options.sort_stamps:
+            raise InputError(f"stream {spec.name} (topic {spec.topic}): {state['back']} frame "
+                             f"stamp(s) go back in trial {trial.span.name}; pass "
+                             "`sort_stamps=True` to sort the frames by stamp, or map the topic "
+                             "with `time: log`", path=rec.path)
+        ref = spec.reference
+        if (state["appender"] is None and spec.reference_topic is None
+                and state["count"] <= (0 if ref == "first" else int(ref))):
             raise InputError(f"trial {trial.span.name}: topic {spec.topic} has "
                              f"{state['count']} frame(s), so there is no frame {spec.reference} "
                              "to take as the reference; lower `reference`", path=rec.path)
-        _write_frames(state)
+        _write_frames(st, state, trial, rec, options, final=True)
+        st.late += state["back"]
         state["appender"].close()
         st.timing_all.append((np.asarray(st.stamps.pop(k), dtype=np.int64) - origin) / 1e9)
         return

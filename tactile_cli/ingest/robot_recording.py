@@ -220,7 +220,9 @@ class RobotRecording:
         self.storage = "MCAP"
         self.size_bytes = self.path.stat().st_size
         self._file = open(self.path, "rb")  # noqa: SIM115 - closed by close()
-        reader = make_reader(self._file)
+        # chunk CRCs checked: a corrupt chunk is then an error, never values decoded from
+        # damaged bytes (zlib's crc32 costs little next to decompression)
+        reader = make_reader(self._file, validate_crcs=True)
         summary = reader.get_summary()
         if summary is None:
             raise InputError("the MCAP file has no summary section (it was not closed "

@@ -15,7 +15,7 @@ example. In brief::
       - topic: /digit/image_raw  # sensor_msgs/Image or CompressedImage -> frames
         name: digit
         kind: visuotactile
-        reference: first         # first | INDEX (the frame of each trial that is the reference)
+        reference: first         # first | INDEX | /TOPIC (each trial's no-contact frame)
       - topic: /taxels           # std_msgs/*MultiArray -> samples, layout dims as channel names
         name: taxels
         kind: taxel_array
@@ -114,7 +114,13 @@ class TopicStream(_Model):
     """This stream's time source (default the mapping's ``time``)."""
     reference: str | int = "first"
     """Frames only: the no-contact reference frame of each trial: ``first`` or the frame's
-    index in the trial (0-based); the reference stays a frame of the sequence."""
+    index in the trial (0-based; in stamp order when ``sort_stamps`` sorts them), which
+    stays a frame of the sequence; or an image topic (``/digit/reference``, starting with
+    ``/``) whose latest message logged before the trial's first frame is the reference (its
+    first message when none comes that early: a reference published once, just after the
+    camera started). Why that rule: a no-contact image must be taken before the press, and
+    the latest one is the gel and lighting closest to the trial's frames; a rig that
+    publishes one reference per recording, or one before each press, both get the right one."""
     serial: str | None = None
     """The sensor's serial number, kept as the sensor attribute ``serial``."""
     calibration: Path | None = None
@@ -151,8 +157,9 @@ class TopicStream(_Model):
         if isinstance(value, str):
             if value.isdigit():
                 return int(value)
-            if value != "first":
-                raise ValueError(f"{value!r} is neither `first` nor a frame index")
+            if value != "first" and not value.startswith("/"):
+                raise ValueError(f"{value!r} is neither `first`, a frame index nor a topic "
+                                 "(a topic starts with /)")
         elif value < 0:
             raise ValueError(f"frame index {value} must be 0 or more")
         return value
@@ -162,9 +169,21 @@ class TopicStream(_Model):
         if self.kind in ("visuotactile", "event_camera") and self.fields is not None:
             raise ValueError(f"`fields` reads values into samples; a {self.kind} stream takes "
                              "the whole image or event array (leave `fields` out)")
+        if self.reference_topic is not None and not self.is_frames:
+            raise ValueError("`reference` names a reference frame; only a visuotactile stream "
+                             "takes one")
+        if self.reference_topic == self.topic:
+            raise ValueError(f"`reference` is the stream's own topic {self.topic}; give the "
+                             "frame's index instead (`reference: 0`)")
         if self.channels is not None and len(set(self.channels)) != len(self.channels):
             raise ValueError("`channels` has duplicates")
         return self
+
+    @property
+    def reference_topic(self) -> str | None:
+        """The topic the reference frame comes from, or None (``first`` or an index)."""
+        ref = self.reference
+        return ref if isinstance(ref, str) and ref.startswith("/") else None
 
     @property
     def is_frames(self) -> bool:

@@ -322,3 +322,23 @@ def test_a_missing_optional_reader_says_which_extra_to_install():
     assert str(exc.value) == ("reading ROS bags needs no_such_reader_module, which is not "
                               "installed; install the robot extra: pip install "
                               "'tactile-cli[robot]'")
+
+
+def test_a_corrupt_mcap_chunk_is_one_line(recordings, tmp_path):
+    from mcap.reader import make_reader
+
+    path, _ = recordings["mcap"]
+    with open(path, "rb") as f:
+        chunk = make_reader(f).get_summary().chunk_indexes[0]
+    data = bytearray(path.read_bytes())
+    data[chunk.chunk_start_offset + chunk.chunk_length - 16] ^= 0xFF  # inside its records
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    mapping = tmp_path / "m.yaml"
+    mapping.write_text("streams:\n  - {topic: /taxels, name: t, kind: taxel_array}\n")
+    out = tmp_path / "o.h5"
+    line = _refuse(["ingest", str(bad), "--mapping", str(mapping), "--out", str(out)], out)
+    assert line.startswith(f"tactile: error: {bad}: cannot read the recording (")
+    assert line.endswith("the file is damaged or was cut short (a recorder killed before it "
+                         "closed the file): re-index it (`rosbag reindex`, `ros2 bag reindex`, "
+                         "`mcap recover`) or record it again")
