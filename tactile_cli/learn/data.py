@@ -129,32 +129,52 @@ def expand_channels(patterns: Sequence[str], names: Sequence[str], *, path: str 
     return out
 
 
+def stream_channel_names(data: DataConfig, path: str | Path) -> tuple[list[str], str]:
+    """The channel names of ``data.stream`` (or of the frames input) in the first trial of
+    ``path``, and the HDF5 path they were read at; one :class:`InputError` when the file
+    has no trials or the trial lacks the stream."""
+    path = Path(path)
+    with TactileFile(path) as f:
+        if not f.trial_names:
+            raise InputError("the file has no trials", path=path)
+        trial = f.trial(f.trial_names[0])
+        if data.frames is not None and trial.has_frames:
+            from .frames import frame_channel_names
+
+            return frame_channel_names(data.frames), f"{trial.where}/frames"
+        if trial.has_signal(data.stream):
+            return (list(trial.signal_sensor(data.stream).channel_names),
+                    f"{trial.where}/signals/{data.stream}")
+        if data.stream == "event_counts" and trial.has_events:
+            return ["positive", "negative", "net"], f"{trial.where}/signals/{data.stream}"
+        raise InputError(f"trial has no stream {data.stream!r} (streams: "
+                         f"{', '.join(trial.signal_names) or 'none'}); fix data.stream",
+                         path=path, where=trial.where)
+
+
 def resolve_channels(data: DataConfig, paths: Sequence[str | Path]) -> DataConfig:
     """``data`` with glob patterns in ``channels`` replaced by the matching channel names of
     the stream in the first trial of the first file (unchanged when there are none)."""
     if not has_patterns(data.channels):
         return data
-    path = Path(paths[0])
-    with TactileFile(path) as f:
-        if not f.trial_names:
-            raise InputError("the file has no trials", path=path)
-        trial = f.trial(f.trial_names[0])
-        where = f"{trial.where}/signals/{data.stream}"
-        if data.frames is not None and trial.has_frames:
-            from .frames import frame_channel_names
-
-            names = frame_channel_names(data.frames)
-            where = f"{trial.where}/frames"
-        elif trial.has_signal(data.stream):
-            names = list(trial.signal_sensor(data.stream).channel_names)
-        elif data.stream == "event_counts" and trial.has_events:
-            names = ["positive", "negative", "net"]
-        else:
-            raise InputError(f"trial has no stream {data.stream!r} (streams: "
-                             f"{', '.join(trial.signal_names) or 'none'}); fix data.stream",
-                             path=path, where=trial.where)
-    channels = expand_channels(data.channels, names, path=path, where=where)
+    names, where = stream_channel_names(data, paths[0])
+    channels = expand_channels(data.channels, names, path=Path(paths[0]), where=where)
     return data.model_copy(update={"channels": channels})
+
+
+def check_channels(data: DataConfig, path: str | Path, *, what: str = "data.channels"
+                   ) -> None:
+    """Refuse, before any training, channels (names or glob patterns) that the stream of
+    the first trial of ``path`` does not have; ``what`` names where they were given."""
+    names, where = stream_channel_names(data, path)
+    if has_patterns(data.channels):
+        expand_channels(data.channels, names, path=Path(path), where=where)
+        return
+    missing = [ch for ch in data.channels if ch not in names]
+    if missing:
+        raise InputError(f"{what}: {', '.join(map(repr, missing))} is not a channel of stream "
+                         f"{data.stream!r} (channels: {', '.join(names) or 'none'})",
+                         path=Path(path), where=where)
 
 
 def read_trials(paths: Sequence[str | Path], data: DataConfig, *, trained: bool = False

@@ -469,7 +469,29 @@ def plan_sweep(config: SweepConfig, *, path: str | Path | None = None,
     ev = list(eval_data) if eval_data else list(config.eval.data)
     eval_paths = data_files(ev) if ev else list(train_paths)
     planned = expand_grid(config, path=path)
+    _check_channel_sets(config, planned, train_paths[0])
     return planned, train_paths, eval_paths
+
+
+def _check_channel_sets(config: SweepConfig, planned: list[PlannedRun], path: Path) -> None:
+    """Refuse before any work a grid in which no run could train because every run to do
+    names channels the training data lacks (the first such error, naming its channel set).
+    A grid where some runs can train runs them and lists the others as failed."""
+    from .config import DataConfig
+    from .data import check_channels
+
+    todo = [r for r in planned if r.status == "todo" and r.config is not None]
+    first: InputError | None = None
+    for run in todo:
+        try:
+            check_channels(DataConfig.model_validate(run.config["data"]), path,
+                           what=f"channel_sets.{run.channel_set}")
+        except InputError as exc:
+            first = first or exc
+            continue
+        return  # this run can train: the grid runs
+    if first is not None:
+        raise first
 
 
 def partial_dir(out: Path) -> Path:

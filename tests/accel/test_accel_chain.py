@@ -131,6 +131,7 @@ def test_the_grip_rings_the_bar_mode_at_rest():
     assert still_peak_hz(0.0, "plastic")[1] < still_peak_hz(0.02, "plastic")[1] / 2
 
 
+@pytest.mark.slow
 def test_prepare_segments_and_speed(scene: Path, tmp_path: Path):
     h5 = tmp_path / "scene.h5"
     ingest([scene], h5, format="accel-tree")

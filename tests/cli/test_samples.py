@@ -29,6 +29,7 @@ def _tree(root):
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow
 def test_samples_writes_every_format(tmp_path):
     out = tmp_path / "s"
     _samples(out)

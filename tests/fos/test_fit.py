@@ -327,6 +327,7 @@ def test_gauss_newton_option_agrees_and_flags_what_it_cannot_reach():
 
 
 # ---------------------------------------------------------------------------- one program
+@pytest.mark.slow
 def test_the_compiled_solver_matches_the_models_and_autodiff():
     """The solver's written-out first-order Jacobian equals autodiff of the projected
     residual, and its second-order basis equals :func:`second_order_basis` (all kinds)."""

@@ -35,6 +35,7 @@ def _fit(path, *args):
     return json.loads(result.stdout)
 
 
+@pytest.mark.slow
 def test_per_channel_recovers_tau_and_alpha(source, tmp_path):
     path, truth = source
     csv_path = tmp_path / "fits.csv"

@@ -75,6 +75,7 @@ def test_a_format_without_a_method_cannot_be_made():
         Half()  # type: ignore[abstract]
 
 
+@pytest.mark.slow
 def test_sniffing_is_by_suffix_header_bytes_and_layout(samples, tmp_path):
     expect = {samples / "events.csv": "events-csv", samples / "events.npy": "events-npy",
               samples / "accel_tree": "accel-tree", samples / "visuotactile": "images",
@@ -191,6 +192,7 @@ def test_help_lists_the_formats_and_which_take_each_flag():
     assert "chunk_events (aedat4, events-npy, events-csv); sample_rate_hz (accel-tree)" in flat
 
 
+@pytest.mark.slow
 def test_import_and_help_stay_light():
     """The registry imports every format module, so none may import pandas, Pillow or the
     AEDAT4 decoder at import time."""

@@ -58,6 +58,7 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", CASES)
 def test_a_byte_that_is_not_utf8_names_the_file_line_and_column(name, samples, tmp_path):
     root = tmp_path / "in"
@@ -90,6 +91,7 @@ def test_swapped_velocity_columns_of_the_accel_tree_are_refused(samples, tmp_pat
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_a_symlink_loop_is_not_reported_as_missing(tmp_path):
     (tmp_path / "a.csv").symlink_to(tmp_path / "b.csv")
     (tmp_path / "b.csv").symlink_to(tmp_path / "a.csv")

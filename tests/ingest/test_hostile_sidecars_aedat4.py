@@ -187,6 +187,7 @@ def accel_tree(tmp_path_factory) -> Path:
     return out / "accel_tree"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage,needle", [
     ("cut-mid-row", "does not end with a line break"),
     ("nul-bytes", "NUL bytes"),

@@ -97,6 +97,7 @@ def test_a_damaged_input_fails_on_one_line_and_the_others_are_written(recordings
     assert sorted(p.name for p in out.iterdir()) == ["rec0.h5", "rec1.h5", "rec2.h5"]
 
 
+@pytest.mark.slow
 def test_same_stems_and_out_with_out_dir_are_refused_before_any_work(recordings,
                                                                       tmp_path: Path):
     other = tmp_path / "other"

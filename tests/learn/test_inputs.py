@@ -66,6 +66,7 @@ def test_run_json_records_the_stream_period_channels_and_units(run100):
                                             ("events/bin", "events/bin"), "event_counts")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("rate", "shown"), [(8000, "0.000125 s (8000 Hz)"),
                                              (101, "0.00990099 s (101 Hz)")])
 def test_evaluate_refuses_another_sample_rate_in_one_line(run100, tmp_path, rate, shown):
@@ -79,6 +80,7 @@ def test_evaluate_refuses_another_sample_rate_in_one_line(run100, tmp_path, rate
     assert not (run / "eval" / "refused").exists()
 
 
+@pytest.mark.slow
 def test_evaluate_accepts_a_rate_within_a_tenth_of_a_percent(run100, tmp_path):
     run, data = run100
     near = counts_file(tmp_path / "near.h5", sample_rate_hz=100.05)
@@ -108,6 +110,7 @@ def test_evaluate_refuses_a_renamed_channel_and_other_units(run100, tmp_path):
         "to the run's units or retrain on it")
 
 
+@pytest.mark.slow
 def test_channels_in_another_order_in_the_file_are_read_in_the_run_s_order(run100, tmp_path):
     # channels are selected by name, so the model sees [net, positive] either way: the same
     # predictions, nothing to refuse

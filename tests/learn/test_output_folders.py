@@ -73,6 +73,7 @@ def test_evaluate_failing_midway_keeps_the_earlier_evaluation(run_copy, heldout_
     assert _hidden(run_copy) == []
 
 
+@pytest.mark.slow
 def test_train_out_file_is_refused_before_training(tmp_path, action_file):
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text(tiny_config().as_yaml())

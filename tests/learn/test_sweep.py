@@ -277,13 +277,29 @@ def test_an_interrupted_overwrite_keeps_the_earlier_sweep_and_a_restart_resumes(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sw", "sweep.yaml"]
 
 
+@pytest.mark.slow
 def test_a_sweep_whose_every_run_failed_exits_2_with_its_table(vibro, tmp_path: Path):
-    path = _one_run_sweep(tmp_path, vibro, channel_sets={"bad": ["Q_x"]})
+    path = _one_run_sweep(tmp_path, vibro, windows=[{"window": 1_000_000, "stride": 50}])
     res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw"), "--workers",
                               "0", "--no-progress"])
     assert res.exit_code == 2, res.output
     assert "0 ok (0 finished before), 1 failed, 0 n/a" in res.stdout
-    assert "'Q_x' is not a channel" in (tmp_path / "sw" / "table.md").read_text()
+    assert "failed" in (tmp_path / "sw" / "table.md").read_text()
+
+
+def test_a_grid_whose_every_channel_set_the_data_lacks_is_refused_before_any_work(
+        vibro, tmp_path: Path):
+    """When every run of the grid names a channel the training data lacks, no run could
+    train: one line naming the set and the channels there are, nothing written (a grid
+    with one good set runs it and lists the bad one as failed: the cluster test above)."""
+    path = _one_run_sweep(tmp_path, vibro, channel_sets={"bad": ["Q_x"]})
+    res = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "sw"), "--workers",
+                              "0", "--no-progress"])
+    assert res.exit_code == 2, res.output
+    line = res.stderr.strip()
+    assert len(line.splitlines()) == 1 and "Traceback" not in res.output
+    assert "channel_sets.bad: 'Q_x' is not a channel of stream" in line and "L_x" in line
+    assert not (tmp_path / "sw").exists()
 
 
 @pytest.mark.slow

@@ -32,6 +32,7 @@ def tiny_run(tmp_path_factory, action_file):
     return out, result
 
 
+@pytest.mark.slow
 def test_run_folder_holds_weights_config_normalisation_history_and_provenance(
         tiny_run, action_file):
     out, result = tiny_run

@@ -56,6 +56,7 @@ def test_slip_speeds_within_10_percent_of_the_truth(scene):
         assert t["displacement_m"] == pytest.approx(truth[t["trial"]] * span, rel=0.06)
 
 
+@pytest.mark.slow
 def test_repo_config_equals_what_the_default_scene_writes(scene):
     out, h5 = scene
     from_scene = load_config(out / "scene.json")

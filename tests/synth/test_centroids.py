@@ -160,6 +160,7 @@ def _read(path: Path) -> dict:
     return out
 
 
+@pytest.mark.slow
 def test_synth_cli_adds_the_stream_and_keeps_the_counts(tmp_path):
     plain, with_c, again = tmp_path / "plain.h5", tmp_path / "c.h5", tmp_path / "again.h5"
     for out, extra in ((plain, []), (with_c, ["--centroids", str(ROIS)]),

@@ -44,6 +44,7 @@ def test_simulate_then_classify_then_features(tmp_path):
     assert res.exit_code == 2 and "--overwrite" in res.output
 
 
+@pytest.mark.slow
 def test_bad_inputs_are_one_line_errors(tmp_path, taxel_file):
     res = runner.invoke(app, ["slip-interface", str(tmp_path / "none.h5")])
     assert res.exit_code == 2 and "tactile: error:" in res.output

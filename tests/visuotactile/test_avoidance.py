@@ -209,6 +209,7 @@ def test_simulate_same_seed_same_bytes_and_refuses_existing(tmp_path):
     assert res.exit_code == 2 and "--overwrite" in res.output
 
 
+@pytest.mark.slow
 def test_config_file_and_validation(tmp_path):
     assert load_avoidance_config(Path("configs/scene_digit_avoidance.yaml")) == AvoidanceConfig()
     bad = tmp_path / "bad.yaml"

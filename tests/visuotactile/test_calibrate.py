@@ -161,6 +161,7 @@ def test_missing_ball_radius_is_one_line(files: dict, tmp_path: Path) -> None:
     assert res.exit_code == 2 and "ball_radius_mm" in res.output and "bare.h5" in res.output
 
 
+@pytest.mark.slow
 def test_plot_writes_the_circle_sheet(files: dict, tmp_path: Path) -> None:
     res = runner.invoke(app, ["normal-labels", str(files["test"]), "--out",
                               str(tmp_path / "p.h5"), "--plot", str(tmp_path / "fig")])

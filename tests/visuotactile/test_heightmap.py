@@ -101,6 +101,7 @@ def test_mapper_skip_below_zero_is_exact(scene: dict[str, Path]) -> None:
     assert np.abs(flat).max() == 0.0
 
 
+@pytest.mark.slow
 def test_cli(scene: dict[str, Path], tmp_path: Path) -> None:
     out = tmp_path / "h.h5"
     res = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model", str(scene["run"]),

@@ -60,6 +60,7 @@ def test_frame_times_all_zero_are_refused_not_replayed(frames: Path, tmp_path: P
         _one_error_line(res, "frame times are not finite and strictly increasing")
 
 
+@pytest.mark.slow
 def test_monitor_interrupted_overwrite_keeps_the_earlier_plots(frames: Path, tmp_path: Path,
                                                                monkeypatch):
     from tactile_cli.visuotactile import monitor_replay

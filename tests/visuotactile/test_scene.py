@@ -181,6 +181,7 @@ def test_same_seed_same_bytes_other_seed_other_lighting(scene: Path, tmp_path: P
     assert np.abs(ref_a - ref_b).mean() > 2  # another seed, another unit's lighting
 
 
+@pytest.mark.slow
 def test_ingest_reads_the_scene(scene: Path, tmp_path: Path) -> None:
     from tactile_cli.store.trials import TactileFile
 
