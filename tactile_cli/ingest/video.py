@@ -8,8 +8,11 @@ at a time (memory stays bounded). OpenCV, the usual alternative, gives no reliab
 timestamps for variable-frame-rate files.
 
 - **Inputs**: a video file (``.mp4``, ``.avi``, ``.mov``, ``.mkv``, ``.webm``, ``.m4v``), or a
-  folder of them (one trial per file, natural name order, trial name = file stem); the first
-  video stream of each file is read.
+  folder of them (one trial per file, natural name order); the first video stream of each
+  file is read. A trial is named by its file stem; when stems repeat (``exp_1/camera_0.avi``,
+  ``exp_2/camera_0.avi``, as labs keep one folder per experiment) every trial is named by its
+  path below the inputs' common folder, parts joined by ``__`` (``exp_1__camera_0``), so a
+  trial-label table can name each one (:func:`video_trial_names`).
 - **Frame times** (``t_s``): every frame's presentation timestamp (pts x the stream's time
   base), relative to the first frame (the container's start offset is kept as the trial
   attribute ``video_start_s`` when it is not 0); variable frame rates are kept as they are.
@@ -22,6 +25,7 @@ timestamps for variable-frame-rate files.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -59,6 +63,17 @@ def video_files(path: Path) -> list[Path]:
         return sorted((p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")
                        and p.suffix.lower() in VIDEO_SUFFIXES), key=lambda p: natural_key(p.name))
     return [path]
+
+
+def video_trial_names(files: Sequence[Path]) -> list[str]:
+    """One trial name per video: the file stems, or, when two stems are equal, each file's
+    path below the files' common folder without its suffix, parts joined by ``__``."""
+    stems = [f.stem for f in files]
+    if len(set(stems)) == len(stems):
+        return stems
+    resolved = [f.resolve() for f in files]
+    common = Path(os.path.commonpath([f.parent for f in resolved]))
+    return ["__".join(f.relative_to(common).with_suffix("").parts) for f in resolved]
 
 
 def _reference_index(options: VideoOptions) -> int:
@@ -133,9 +148,9 @@ def ingest_videos(inputs: Sequence[Path], options: VideoOptions, writer: StoreWr
     size: tuple[int, int] | None = None
     intervals: list[np.ndarray] = []
     progress.start(len(files), "videos")
-    for path in files:
+    for path, name in zip(files, video_trial_names(files), strict=True):
         source = writer.add_source(path)
-        trial = writer.trial(path.stem, sources=[source])
+        trial = writer.trial(name, sources=[source])
         pending: list[np.ndarray] = []
         times: list[float] = []
         all_t: list[float] = []
@@ -191,7 +206,7 @@ def describe_videos(path: Path, options: VideoOptions, fmt: IngestFormat[Any]) -
     if not files:
         raise InputError(f"holds no videos ({', '.join(VIDEO_SUFFIXES)})", path=path)
     streams, trials, total = [], [], 0
-    for f in files:
+    for f, name in zip(files, video_trial_names(files), strict=True):
         container = _open(f)
         try:
             stream = container.streams.video[0]
@@ -208,12 +223,12 @@ def describe_videos(path: Path, options: VideoOptions, fmt: IngestFormat[Any]) -
         size = f.stat().st_size
         total += size
         streams.append(StreamSummary(
-            name=f.stem, type="frames", count=len(t), unit="frames", rate_hz=stats.rate_hz,
+            name=name, type="frames", count=len(t), unit="frames", rate_hz=stats.rate_hz,
             jitter_s=interval_jitter_s(np.diff(t)), t_first_s=float(t[0]) if len(t) else None,
             t_last_s=float(t[-1]) if len(t) else None,
             span_s=float(t[-1] - t[0]) if len(t) else None, size_bytes=size, width_px=width,
             height_px=height, extra={"codec": codec, "file": f.name}))
-        trials.append(TrialSummary(name=f.stem, source=str(f), counts={"frames": len(t)},
+        trials.append(TrialSummary(name=name, source=str(f), counts={"frames": len(t)},
                                    duration_s=float(t[-1] - t[0]) if len(t) else None))
     notes = [] if any(s.count for s in streams) else ["no video frames in the file(s)"]
     return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title, size_bytes=total,
@@ -250,4 +265,4 @@ class VideoFormat(IngestFormat[VideoOptions]):
 VIDEO = VideoFormat()
 
 __all__ = ["VIDEO", "VIDEO_SUFFIXES", "VideoFormat", "VideoOptions", "describe_videos",
-           "ingest_videos", "video_files"]
+           "ingest_videos", "video_files", "video_trial_names"]

@@ -205,6 +205,10 @@ class FramesConfig(_Model):
     """The frame subtracted: the trial's stored no-contact frame (``frames/reference``;
     ``tactile ingest --reference first`` stores each folder's first frame), or the trial's
     own first frame."""
+    step: int = Field(default=1, ge=1, le=1000)
+    """Keep every ``step``-th frame of a trial (frames 0, step, 2 step, ...; the sample
+    period grows by ``step``): a 25 fps video of 450 frames becomes 90 samples at 5 fps
+    with ``step: 5``. The reference is unchanged."""
 
     @property
     def planes(self) -> tuple[str, ...]:
@@ -243,6 +247,12 @@ class DataConfig(_Model):
         return value
     stride: int = Field(default=1, ge=1, le=_MAX_SAMPLES)
     """Samples between the ends of consecutive windows."""
+    align: Literal["start", "end"] = "start"
+    """Where the windows of a trial are laid: every ``stride`` samples from the first sample
+    that ends a full window (``start``), or back from the trial's last sample (``end``: the
+    last window always ends at the last sample; with ``pad`` a trial shorter than the window
+    still gives that one window), which a decision per trial over recordings of different
+    lengths needs."""
     pad: Literal["none", "zero", "edge"] = "none"
     """Left padding of each trial by ``window - 1`` samples so that every sample can end a
     window: ``zero`` pads with 0 in raw units (no events before the trial starts), ``edge``
@@ -276,6 +286,12 @@ class DataConfig(_Model):
     :mod:`.preprocess`)."""
     class_weights: bool = True
     """Weight each classification loss by inverse class frequency in the training split."""
+    decide_by: str | None = Field(default=None, min_length=1, max_length=200)
+    """A trial label whose trials are decided together: evaluation also pools the windows of
+    every trial that shares its value into one decision per value (majority vote and mean
+    probability, as per trial), for trial-level targets. ``experiment`` for the two cameras
+    of one grasp, recorded as two trials. Keep such trials on one side of every split
+    (split ``by`` the same label or a coarser one)."""
     split: SplitConfig = SplitConfig()
     boundary_margin: int = Field(default=1, ge=0, le=_MAX_SAMPLES)
     """Evaluation also reports accuracy without the windows whose target sample is within
@@ -308,6 +324,9 @@ class DataConfig(_Model):
         if self.frames is not None and self.stream != FRAMES_STREAM:
             raise ValueError(f"`frames` goes with `stream: {FRAMES_STREAM}` (the image "
                              f"frames of each trial); this config reads stream {self.stream!r}")
+        if self.decide_by is not None and not any(t.source == "trial" for t in self.targets):
+            raise ValueError(f"`decide_by` (={self.decide_by!r}) pools trial-level decisions: "
+                             "give a target with `source: trial`")
         if self.label_rule == "majority" and self.label_delay:
             raise ValueError("`label_delay` applies to `label_rule: last` only")
         if self.label_delay >= self.window:

@@ -66,6 +66,7 @@ from .data import (
     make_windows,
     read_trials,
     resolve_channels,
+    trial_groups,
 )
 from .device import resolve_device
 from .drift import (
@@ -374,6 +375,24 @@ def _fold_scores(heads: Sequence[Any], ws: WindowSet, outputs: dict[str, np.ndar
     return out
 
 
+def _split_groups(folds: Sequence[dict[str, Any]], keys: Sequence[str], groups: Sequence[str],
+                  by: str | None) -> list[str]:
+    """A note when trials of one ``decide_by`` group are held out in different folds (the
+    group's decision then mixes models, and its trials trained each other's folds)."""
+    group_of = dict(zip(keys, groups, strict=True))
+    folds_of: dict[str, set[int]] = {}
+    for fold in folds:
+        for k in fold["test"]:
+            if k in group_of:
+                folds_of.setdefault(group_of[k], set()).add(int(fold["fold"]))
+    split = sorted(g for g, f in folds_of.items() if len(f) > 1)
+    if not split:
+        return []
+    return [f"{len(split)} group(s) of decide_by {by!r} have trials in several folds ("
+            f"{', '.join(split[:3])}{', ...' if len(split) > 3 else ''}): their trials trained "
+            "each other's models; split by the same label or a coarser one"]
+
+
 def _spread(folds: Sequence[dict[str, Any]], key: str) -> dict[str, float | None]:
     values = np.array([f[key] for f in folds if f.get(key) is not None
                        and math.isfinite(f[key])], dtype=np.float64)
@@ -472,7 +491,11 @@ def evaluate_cv(
         raise InputError(f"the held-out trials give no windows (window {cfg.data.window} "
                          "samples)", path=paths[0])
     merged = {k_: np.concatenate(v) for k_, v in outputs.items()}
-    metrics, decoded = head_metrics(first.heads, merged, pooled, {}, cfg.data.boundary_margin)
+    grouped = trial_groups(trials, cfg.data)
+    if grouped is not None:
+        notes = [*notes, *_split_groups(cv["folds"], keys, grouped, cfg.data.decide_by)]
+    metrics, decoded = head_metrics(first.heads, merged, pooled, {}, cfg.data.boundary_margin,
+                                    None if grouped is None else (cfg.data.decide_by, grouped))
     cv_record = {"k": cv["k"], "n_folds": len(cv["folds"]), "mode": cv["mode"], "by": cv["by"],
                  "folds": fold_rows, **_spread(fold_rows, "accuracy"),
                  **_spread(fold_rows, "macro_f1"), **_spread(fold_rows, "per_trial_accuracy"),

@@ -273,7 +273,7 @@ def _read_frames(trial: Trial, data: DataConfig, sample_targets: list[str], trai
                              f"{names[-1]}); {todo}", path=path, where=where)
     frames = trial.frames()
     x = select_columns(frame_series(frames, data.frames), names, data.channels)
-    t_s = np.asarray(frames.t_s, dtype=np.float64)
+    t_s = np.asarray(frames.t_s, dtype=np.float64)[::data.frames.step]
     steps = np.diff(t_s)
     period = float(np.median(steps)) if steps.size and np.median(steps) > 0 else math.nan
     return TrialSeries(str(path), trial.name, trial.split, x, t_s, {}, {}, trial.labels,
@@ -525,6 +525,21 @@ def fit_normalisation(train: Sequence[TrialSeries], channels: Sequence[str], *,
 
 
 # -- windows ---------------------------------------------------------------------------------
+def trial_groups(trials: Sequence[TrialSeries], data: DataConfig) -> list[str] | None:
+    """The ``data.decide_by`` label of every trial (as text, in order), or None when the
+    config decides per trial only; InputError naming a trial without the label."""
+    if data.decide_by is None:
+        return None
+    out = []
+    for t in trials:
+        if data.decide_by not in t.trial_labels:
+            raise InputError(f"trial has no label {data.decide_by!r} (labels: "
+                             f"{', '.join(t.trial_labels) or 'none'}); fix data.decide_by or "
+                             "label every trial", path=t.file, where=f"/trials/{t.trial}")
+        out.append(str(t.trial_labels[data.decide_by]))
+    return out
+
+
 @dataclass
 class WindowSet:
     """Windows of several trials without copies.
@@ -606,8 +621,11 @@ def center_scale(windows: np.ndarray) -> np.ndarray:
 def window_ends(n_samples: int, data: DataConfig) -> np.ndarray:
     """(k,) index (within the trial) of the last sample of each window of a trial of
     ``n_samples`` samples: every ``stride`` samples from the first sample that has a full
-    window (``window - 1`` unpadded, ``label_delay`` padded)."""
+    window (``window - 1`` unpadded, ``label_delay`` padded), or with ``align: end`` every
+    ``stride`` samples back from the last sample down to that first one, in time order."""
     first = data.label_delay if data.pad != "none" else data.window - 1
+    if data.align == "end":
+        return np.arange(n_samples - 1, first - 1, -data.stride, dtype=np.int64)[::-1].copy()
     return np.arange(first, n_samples, data.stride, dtype=np.int64)
 
 

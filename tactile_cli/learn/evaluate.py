@@ -31,7 +31,7 @@ from ..store.origin import data_origin
 from ..store.provenance import current_command, utc_now
 from . import runs
 from .cv import evaluate_cv
-from .data import check_heads_match, data_files, make_windows, read_trials
+from .data import check_heads_match, data_files, make_windows, read_trials, trial_groups
 from .device import resolve_device
 from .drift import SHIFT_THRESHOLD_SD, input_shift, interleaving
 from .inputs import checked_input, input_record
@@ -129,8 +129,10 @@ def evaluate(
                          "are the trials shorter than the window?")
     model = run.load_model()
     outputs, used = predict_on(model, ws, dev)
+    grouped = trial_groups(trials, cfg.data)
     metrics, decoded = head_metrics(run.heads, outputs, ws, run.normalisation.targets,
-                                    cfg.data.boundary_margin)
+                                    cfg.data.boundary_margin,
+                                    None if grouped is None else (cfg.data.decide_by, grouped))
     lat = measure_latency_of(model, ws, threads) if latency else None
     extra: dict[str, Any] = {
         "shift": input_shift(trials, cfg.data, run.normalisation,

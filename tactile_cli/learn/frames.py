@@ -9,7 +9,8 @@ levels of the 8-bit camera (-255 to 255), grey (ITU-R BT.601 luma of the differe
 red, green and blue. The values are plane-major (all of plane 0's rows, then plane 1's),
 so ``window.reshape(W, planes, height, width)`` restores the images; a channel is named
 ``<plane>_r<row>_c<col>`` (:func:`frame_channel_names`). The sample period is the median
-step of the frame times. From there the frames are windows like any stream: the same
+step of the frame times (``step`` times it when only every ``step``-th frame is kept).
+From there the frames are windows like any stream: the same
 splits, normalisation (per pixel, from the training trials), windows, evaluation,
 perturbation and export.
 """
@@ -71,10 +72,11 @@ def frame_difference(image: np.ndarray, reference: np.ndarray, cfg: FramesConfig
 
 
 def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
-    """(n_frames, planes * height * width) float32: every frame of a trial as its
-    difference from the reference (:class:`~.config.FramesConfig`); InputError naming the
-    trial when the frames are smaller than the configured size or there is no stored
-    reference for ``reference: stored``."""
+    """(ceil(n_frames / step), planes * height * width) float32: every ``step``-th frame
+    of a trial (all by default) as its difference from the reference
+    (:class:`~.config.FramesConfig`); InputError naming the trial when the frames are
+    smaller than the configured size or there is no stored reference for
+    ``reference: stored``."""
     h0, w0 = frames.shape[:2]
     if cfg.height > h0 or cfg.width > w0:
         raise InputError(f"frames of {w0} x {h0} px are smaller than data.frames "
@@ -93,9 +95,10 @@ def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
                              path=frames.path,
                              where=frames.where) from None
     ref = _planes(area_downsample(reference, cfg.height, cfg.width), cfg)
-    out = np.empty((frames.n_frames, cfg.n_values), np.float32)
-    for k, (_, image) in enumerate(frames):
-        out[k] = _planes(area_downsample(image, cfg.height, cfg.width), cfg) - ref
+    kept = range(0, frames.n_frames, cfg.step)
+    out = np.empty((len(kept), cfg.n_values), np.float32)
+    for i, k in enumerate(kept):
+        out[i] = _planes(area_downsample(frames[k], cfg.height, cfg.width), cfg) - ref
     return out
 
 

@@ -66,6 +66,10 @@ class ClassificationMetrics:
     n_trials: int | None = None
     per_trial: dict[str, Any] | None = None
     """Trial-level targets: :class:`.trial_metrics.TrialVotes` as a dict."""
+    per_group: dict[str, Any] | None = None
+    """Trial-level targets with ``data.decide_by``: the votes of each group of trials that
+    share that label (:class:`.trial_metrics.TrialVotes` as a dict, ``n_trials`` counting
+    groups) and ``by``, the label."""
     accuracy_by: dict[str, dict[str, dict[str, Any]]] | None = None
     """Multi-task runs: this head's accuracy within each true class of every other
     classification head, ``{other head: {class: {"accuracy", "n"}}}`` (e.g. texture at
@@ -220,10 +224,13 @@ class EvalResult:
 
 
 def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: WindowSet,
-                 targets_scale: dict[str, tuple[float, float]], boundary_margin: int
+                 targets_scale: dict[str, tuple[float, float]], boundary_margin: int,
+                 groups: tuple[str, Sequence[str]] | None = None
                  ) -> tuple[list[ClassificationMetrics | RegressionMetrics],
                             dict[str, np.ndarray]]:
     """Metrics of every head and the decoded predictions (class index or value).
+    ``groups``: ``(label, value of every trial of ws.trials)`` to also decide trial-level
+    targets per group of trials (``data.decide_by``; :func:`.data.trial_groups`).
 
     Classification heads also get bootstrap intervals over trials and, for trial-level
     targets, per-trial majority-vote and mean-probability results; the accuracy without
@@ -250,6 +257,12 @@ def head_metrics(heads: Sequence[HeadSpec], outputs: dict[str, np.ndarray], ws: 
             if head.source == "trial":
                 votes = trial_votes(ws.targets[head.name], out, ws.trial_index)
                 m.per_trial = None if votes is None else votes.as_dict()
+                if groups is not None and len(ws):
+                    by, values = groups
+                    _, inverse = np.unique(np.asarray(values, dtype=object).astype(str),
+                                           return_inverse=True)
+                    pooled = trial_votes(ws.targets[head.name], out, inverse[ws.trial_index])
+                    m.per_group = None if pooled is None else {"by": by, **pooled.as_dict()}
             metrics.append(m)
         else:
             m_, s_ = targets_scale.get(head.name, (0.0, 1.0))

@@ -60,6 +60,13 @@ def _classification_blocks(m: ClassificationMetrics) -> list[str | TextTable]:
                       f"{fmt_interval(v['majority_accuracy_ci95'])}), mean probability "
                       f"{pct(v['mean_probability_accuracy'])} (95 % CI "
                       f"{fmt_interval(v['mean_probability_accuracy_ci95'])})")
+    if m.per_group:
+        g = m.per_group
+        blocks.append(f"{m.head} per {g['by']} ({g['n_trials']} groups of trials, decided "
+                      f"together): majority vote {pct(g['majority_accuracy'])} (95 % CI "
+                      f"{fmt_interval(g['majority_accuracy_ci95'])}), mean probability "
+                      f"{pct(g['mean_probability_accuracy'])} (95 % CI "
+                      f"{fmt_interval(g['mean_probability_accuracy_ci95'])})")
     return blocks
 
 

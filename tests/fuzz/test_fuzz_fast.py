@@ -13,6 +13,7 @@ when a fix makes one pass, the XPASS fails the suite until the entry is removed 
 from __future__ import annotations
 
 import dataclasses
+import fcntl
 import hashlib
 import json
 import subprocess
@@ -65,7 +66,12 @@ WORK = Path(tempfile.gettempdir()) / f"tactile-fuzz-fast-{_source_key()}"
 
 
 def _corpus() -> fuzz_corpus.Corpus:
-    return fuzz_corpus.build_corpus(WORK, seed=SEED, n_random=1)
+    """The cached corpus, built by one process at a time: a second pytest process that
+    collects meanwhile waits on the lock and then reuses what the first one finished."""
+    WORK.mkdir(parents=True, exist_ok=True)
+    with open(WORK / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        return fuzz_corpus.build_corpus(WORK, seed=SEED, n_random=1)
 
 
 CORPUS = _corpus()

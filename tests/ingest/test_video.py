@@ -60,6 +60,28 @@ def test_a_folder_of_videos_is_one_trial_each_and_info_reads_the_container(tmp_p
         np.testing.assert_array_equal(h5["trials/touch_10/frames/images"][:], _frames(1, 4))
 
 
+def test_videos_of_one_name_in_experiment_folders_are_named_by_their_path(tmp_path):
+    # one folder per experiment, one file per camera: camera_0.avi in both folders
+    for k, exp in enumerate(("exp_1", "exp_2")):
+        (tmp_path / "mug" / exp).mkdir(parents=True)
+        for cam in ("camera_0", "camera_2"):
+            write_video(tmp_path / "mug" / exp / f"{cam}.mkv", _frames(10 * k + len(cam), 3))
+    labels = tmp_path / "labels.csv"
+    labels.write_text("trial,experiment\nexp_1__camera_0,e1\nexp_1__camera_2,e1\n"
+                      "exp_2__camera_0,e2\nexp_2__camera_2,e2\n")
+    inputs = [tmp_path / "mug" / "exp_1", tmp_path / "mug" / "exp_2"]
+    out = ingest(inputs, tmp_path / "o.h5", trial_labels=labels)
+    with h5py.File(out) as h5:
+        assert list(h5["trials"]) == ["exp_1__camera_0", "exp_1__camera_2", "exp_2__camera_0",
+                                      "exp_2__camera_2"]
+        assert h5["trials/exp_2__camera_2/labels"].attrs["experiment"] == "e2"
+        np.testing.assert_array_equal(h5["trials/exp_2__camera_2/frames/images"][:],
+                                      _frames(10 + len("camera_2"), 3))
+    # one folder alone: the stems are unique, so trials keep them
+    with h5py.File(ingest([inputs[0]], tmp_path / "one.h5")) as h5:
+        assert list(h5["trials"]) == ["camera_0", "camera_2"]
+
+
 def test_damaged_and_empty_videos_are_one_line(tmp_path):
     video = write_video(tmp_path / "v.mkv", _frames(3))
     cut = tmp_path / "cut.mkv"

@@ -76,9 +76,9 @@ def test_cli_unknown_key_exits_2_naming_key_and_file(tmp_path, action_file):
     assert result.exit_code == 2
     assert result.stderr.strip() == (
         f"tactile: error: {path}, line 6: unknown key `data.windw` (allowed here: stream, "
-        "channels, window, stride, pad, label_rule, label_delay, targets, bin_s, transform, "
-        "normalise, window_norm, class_weights, split, boundary_margin, baseline, augment, "
-        "frames)")
+        "channels, window, stride, align, pad, label_rule, label_delay, targets, bin_s, "
+        "transform, normalise, window_norm, class_weights, decide_by, split, boundary_margin, "
+        "baseline, augment, frames)")
     assert not (tmp_path / "run").exists()
 
 

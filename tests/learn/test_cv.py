@@ -183,6 +183,34 @@ def test_per_trial_votes_and_bootstrap_intervals():
     assert bootstrap_window_intervals(cms[:1])["accuracy_ci95"] is None
 
 
+def test_trials_of_one_group_are_decided_together():
+    from tactile_cli.learn.data import WindowSet
+    from tactile_cli.learn.heads import HeadSpec
+    from tactile_cli.learn.metrics import head_metrics
+
+    # two cameras (trials) per experiment; experiment A slipped (1), B held (0). Camera 0 of
+    # A sees nothing (two weak 0 windows), camera 2 of A sees the slip clearly: per trial
+    # camera 0 of A is wrong, per experiment the mean probability over both is right.
+    logits = np.array([[0.2, 0], [0.2, 0], [0, 5], [0, 5], [3, 0], [3, 0], [2, 0], [0, 1]])
+    y = np.array([1, 1, 1, 1, 0, 0, 0, 0])
+    tid = np.array([0, 0, 1, 1, 2, 2, 3, 3])
+    n = len(y)
+    ws = WindowSet(np.zeros((0, 1), np.float32), np.zeros(n, np.int64), 1, {"slipped": y},
+                   tid, np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n), {},
+                   ["A_c0", "A_c2", "B_c0", "B_c2"])
+    heads = [HeadSpec("slipped", "classification", "trial", 1.0, ("0", "1"))]
+    (m,), _ = head_metrics(heads, {"slipped": logits}, ws, {}, 1,
+                           ("experiment", ["A", "A", "B", "B"]))
+    assert m.per_trial["n_trials"] == 4 and m.per_trial["mean_probability_accuracy"] == 0.75
+    g = m.per_group
+    assert g["by"] == "experiment" and g["n_trials"] == 2
+    assert g["mean_probability_accuracy"] == 1.0
+    # the majority vote of A is a 2-2 tie, which goes to the lower class (0): wrong
+    assert g["majority_accuracy"] == 0.5 and g["confusion_matrix"] == [[1, 0], [1, 0]]
+    (plain,), _ = head_metrics(heads, {"slipped": logits}, ws, {}, 1)
+    assert plain.per_group is None
+
+
 @pytest.mark.slow
 def test_boundary_metric_only_for_labels_that_change_inside_a_trial(tmp_path, action_file):
     from tactile_cli.learn.train import train

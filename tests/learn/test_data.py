@@ -55,6 +55,24 @@ def test_windows_are_exact_slices_with_stride_and_no_padding():
         np.testing.assert_array_equal(ws.windows(np.array([k]))[0], trial.x[end - 3:end + 1])
 
 
+def test_windows_aligned_to_the_end_always_end_at_the_last_sample():
+    trial = _trial(11)
+    ws = make_windows([trial], _data(window=4, stride=3, align="end"), [ACTION], _identity())
+    assert ws.end_index.tolist() == [4, 7, 10]  # back from sample 10, full windows only
+    np.testing.assert_array_equal(ws.windows(np.array([2]))[0], trial.x[7:11])
+    # one window as long as the longest trial, zero-padded: each trial's last 6 samples
+    short, long_ = _trial(3, name="short"), _trial(6, name="long")
+    one = make_windows([short, long_], _data(window=6, stride=6, pad="zero", align="end"),
+                       [ACTION], _identity())
+    assert one.end_index.tolist() == [2, 5] and one.trial_index.tolist() == [0, 1]
+    first = one.windows(np.array([0]))[0]
+    np.testing.assert_array_equal(first[:3], 0)
+    np.testing.assert_array_equal(first[3:], short.x)
+    # without padding a trial shorter than the window gives none, as with align: start
+    assert make_windows([short], _data(window=6, stride=6, align="end"), [ACTION],
+                        _identity()).end_index.tolist() == []
+
+
 def test_zero_and_edge_padding_give_every_sample_a_causal_window():
     trial = _trial(5)
     zero = make_windows([trial], _data(pad="zero"), [ACTION], _identity())

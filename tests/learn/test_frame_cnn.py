@@ -85,6 +85,21 @@ def test_trials_read_as_series_of_pixel_channels(lifts):
     assert t.trial_labels["slipped"] == 0 and t.x[-1].max() > 20
 
 
+def test_a_frame_step_keeps_every_step_th_frame_at_a_longer_period(lifts):
+    every = parse_config(_raw(window=3, stride=3))
+    data = resolve_channels(every.data, [lifts[0]])
+    full = read_trials([lifts[0]], data)[0]
+    stepped_cfg = parse_config(_raw(window=3, stride=3, frames={"width": 8, "height": 6,
+                                                                 "step": 2}))
+    stepped = read_trials([lifts[0]], resolve_channels(stepped_cfg.data, [lifts[0]]))[0]
+    # 6 frames -> frames 0, 2, 4: the same values, twice the period
+    np.testing.assert_array_equal(stepped.x, full.x[::2])
+    np.testing.assert_array_equal(stepped.t_s, full.t_s[::2])
+    assert stepped.sample_period_s == pytest.approx(2 * full.sample_period_s)
+    with pytest.raises(InputError, match="step"):
+        parse_config(_raw(frames={"width": 8, "height": 6, "step": 0}))
+
+
 def test_config_round_trip_and_refusals(tmp_path):
     cfg = parse_config(_raw(frames={"width": 16, "height": 12, "colour": True,
                                     "reference": "first"}, temporal="conv"))
@@ -106,6 +121,11 @@ def test_config_round_trip_and_refusals(tmp_path):
     with pytest.raises(InputError, match="cnn2d_frames reads image sequences: set "
                                          "data.stream: frames"):
         parse_config(bad)
+    sample = _raw()
+    sample["data"] = {**sample["data"], "decide_by": "experiment",
+                      "targets": [{"name": "slipped", "source": "sample"}]}
+    with pytest.raises(InputError, match="`decide_by` .* give a target with `source: trial`"):
+        parse_config(sample)
     with pytest.raises(InputError, match=r"unknown key `data.frames.size`"):
         parse_config({**_raw(), "data": {**_raw()["data"], "frames": {"size": 3}}})
 
@@ -156,8 +176,17 @@ def test_a_per_frame_temporal_convolution_decides_at_every_frame(lifts, tmp_path
 def test_cross_validation_grouped_by_object_gives_two_folds(lifts, tmp_path):
     raw = _raw(epochs=4)
     raw["data"]["split"] = {"mode": "group", "by": "object", "val_fraction": 0.0}
+    raw["data"]["decide_by"] = "object"  # the lifts of one object decided together
     result = train_cv(parse_config(raw), [lifts[0]], tmp_path / "cv", k=2, jobs=1,
                       command="tests")
     assert result.k == 2
     metrics = evaluate_cv(tmp_path / "cv", None, latency=False, command="tests")
     assert metrics.n_trials == 16 and metrics.heads[0].accuracy_ci95 is not None
+    assert metrics.heads[0].per_group["n_trials"] == 2
+    assert not any("several folds" in n for n in metrics.notes)  # grouped: none split
+    # a stratified split puts one object's lifts in both folds: the note says so
+    raw["data"]["split"] = {"mode": "stratified", "by": "slipped", "val_fraction": 0.0}
+    train_cv(parse_config(raw), [lifts[0]], tmp_path / "strat", k=2, jobs=1, command="tests")
+    mixed = evaluate_cv(tmp_path / "strat", None, latency=False, command="tests")
+    assert any("2 group(s) of decide_by 'object' have trials in several folds" in n
+               for n in mixed.notes), mixed.notes
