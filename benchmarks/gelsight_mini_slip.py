@@ -78,6 +78,7 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "lstm_32x24": {},
     "lstm_32x24_levels": {"data": {"window_norm": "none"}},
     "lstm_32x24_colour": {"data": {"frames": {"colour": True}}},
+    "lstm_32x24_motion": {"data": {"frames": {"change": "previous"}}},
     "tconv_32x24": {"model": {"temporal": "conv", "temporal_layers": 2,
                               "temporal_kernel": 5}},
 }
@@ -221,6 +222,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--epochs", type=int, default=None, help="override optim.epochs")
     ap.add_argument("--no-intensity", action="store_true", help="skip the intensity signal")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "figures")
+    ap.add_argument("--name", default=None, help="file stem of the record (default "
+                    "gelsight_mini_slip, or gelsight_mini_slip_intensity with no variant)")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     args = ap.parse_args(argv)
     if not args.source.is_dir():
@@ -264,8 +267,8 @@ def main(argv: list[str] | None = None) -> int:
         "intensity_signal": intensity, "results": results,
         "wall_time_s": time.perf_counter() - started,
     }
-    out_json = args.out / ("gelsight_mini_slip.json" if args.variants
-                           else "gelsight_mini_slip_intensity.json")
+    out_json = args.out / (f"{args.name}.json" if args.name else "gelsight_mini_slip.json"
+                           if args.variants else "gelsight_mini_slip_intensity.json")
     tmp_json = out_json.with_name(out_json.name + ".tmp")
     tmp_json.write_text(runs.dumps(record) + "\n", encoding="utf-8")
     os.replace(tmp_json, out_json)

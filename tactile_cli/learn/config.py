@@ -205,6 +205,10 @@ class FramesConfig(_Model):
     """The frame subtracted: the trial's stored no-contact frame (``frames/reference``;
     ``tactile ingest --reference first`` stores each folder's first frame), or the trial's
     own first frame."""
+    change: Literal["reference", "previous"] = "reference"
+    """What each frame is a difference from: the reference (the change since no contact),
+    or the kept frame before it (``previous``: the motion between samples, the first
+    kept frame still minus the reference)."""
     step: int = Field(default=1, ge=1, le=1000)
     """Keep every ``step``-th frame of a trial (frames 0, step, 2 step, ...; the sample
     period grows by ``step``): a 25 fps video of 450 frames becomes 90 samples at 5 fps

@@ -73,7 +73,8 @@ def frame_difference(image: np.ndarray, reference: np.ndarray, cfg: FramesConfig
 
 def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
     """(ceil(n_frames / step), planes * height * width) float32: every ``step``-th frame
-    of a trial (all by default) as its difference from the reference
+    of a trial (all by default) as its difference from the reference (or, with ``change:
+    previous``, from the kept frame before it)
     (:class:`~.config.FramesConfig`); InputError naming the trial when the frames are
     smaller than the configured size or there is no stored reference for
     ``reference: stored``."""
@@ -98,7 +99,10 @@ def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
     kept = range(0, frames.n_frames, cfg.step)
     out = np.empty((len(kept), cfg.n_values), np.float32)
     for i, k in enumerate(kept):
-        out[i] = _planes(area_downsample(frames[k], cfg.height, cfg.width), cfg) - ref
+        small = _planes(area_downsample(frames[k], cfg.height, cfg.width), cfg)
+        out[i] = small - ref
+        if cfg.change == "previous":
+            ref = small
     return out
 
 

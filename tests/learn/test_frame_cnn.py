@@ -98,6 +98,12 @@ def test_a_frame_step_keeps_every_step_th_frame_at_a_longer_period(lifts):
     assert stepped.sample_period_s == pytest.approx(2 * full.sample_period_s)
     with pytest.raises(InputError, match="step"):
         parse_config(_raw(frames={"width": 8, "height": 6, "step": 0}))
+    # the change between kept samples: successive differences of the same values
+    moved_cfg = parse_config(_raw(window=3, stride=3, frames={"width": 8, "height": 6,
+                                                               "step": 2, "change": "previous"}))
+    moved = read_trials([lifts[0]], resolve_channels(moved_cfg.data, [lifts[0]]))[0]
+    np.testing.assert_allclose(moved.x[0], stepped.x[0])
+    np.testing.assert_allclose(moved.x[1:], np.diff(stepped.x, axis=0), atol=1e-4)
 
 
 def test_config_round_trip_and_refusals(tmp_path):
