@@ -59,7 +59,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from gelsight_slip_sequence import cache_frame_series, wilson  # noqa: E402
+from gelsight_slip_sequence import apply_changes, cache_frame_series, wilson  # noqa: E402
 
 from tactile_cli._version import __version__  # noqa: E402
 from tactile_cli.learn import runs  # noqa: E402
@@ -121,13 +121,7 @@ def ingest(source: Path, labels: Path, out: Path) -> list[str]:
 
 
 def variant_config(name: str, epochs: int | None) -> Any:
-    raw = yaml.safe_load(CONFIG.read_text())
-    for section, changes in VARIANTS[name].items():
-        for key, value in changes.items():
-            if isinstance(value, dict) and isinstance(raw[section].get(key), dict):
-                raw[section][key] = {**raw[section][key], **value}
-            else:
-                raw[section][key] = value
+    raw = apply_changes(yaml.safe_load(CONFIG.read_text()), VARIANTS[name])
     if epochs is not None:
         raw["optim"]["epochs"] = epochs
     return parse_config(raw)

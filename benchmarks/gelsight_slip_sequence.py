@@ -122,14 +122,20 @@ def ingest(source: Path, labels: Path, out: Path) -> list[str]:
     return cmd
 
 
-def variant_config(name: str, scheme: str, epochs: int | None) -> Any:
-    raw = yaml.safe_load(CONFIG.read_text())
-    for section, changes in VARIANTS[name].items():
-        for key, value in changes.items():
+def apply_changes(raw: dict[str, Any], changes: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """``raw`` (a parsed config) with a variant's changes (section -> key -> value; a dict
+    value is merged into a dict it replaces) applied in place; returns ``raw``."""
+    for section, keys in changes.items():
+        for key, value in keys.items():
             if isinstance(value, dict) and isinstance(raw[section].get(key), dict):
                 raw[section][key] = {**raw[section][key], **value}
             else:
                 raw[section][key] = value
+    return raw
+
+
+def variant_config(name: str, scheme: str, epochs: int | None) -> Any:
+    raw = apply_changes(yaml.safe_load(CONFIG.read_text()), VARIANTS[name])
     raw["data"]["split"] = SCHEMES[scheme][0]
     if epochs is not None:
         raw["optim"]["epochs"] = epochs

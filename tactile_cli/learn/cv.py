@@ -202,6 +202,7 @@ def train_cv(
     config = config.model_copy(update={"data": resolve_channels(config.data, paths)})
     d = config.data
     trials = read_trials(paths, d)
+    trial_groups(trials, d)  # a trial without the decide_by label: refused before training
     plan = cv_folds(trials, d.split, config.seed, k, by=default_by(d.split, d.targets))
     record = _plan_record(config, paths, plan)
     partial = partial_dir(out)

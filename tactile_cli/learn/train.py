@@ -45,6 +45,7 @@ from .data import (
     regression_stats,
     resolve_channels,
     resolve_heads,
+    trial_groups,
 )
 from .device import device_name, resolve_device
 from .drift import recording_record
@@ -150,6 +151,7 @@ def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
     splits from outside the config (else the config's ``data.split`` rule)."""
     d = config.data
     trials = read_trials(data_paths, d)
+    trial_groups(trials, d)  # a trial without the decide_by label: refused before training
     spec = input_spec(trials, d.stream)
     if given is not None:
         assignment = split_from_mapping(trials, given.mapping, source=given.source,

@@ -136,6 +136,15 @@ def test_config_round_trip_and_refusals(tmp_path):
         parse_config({**_raw(), "data": {**_raw()["data"], "frames": {"size": 3}}})
 
 
+def test_a_decide_by_label_the_trials_lack_is_refused_before_training(lifts, tmp_path):
+    raw = _raw()
+    raw["data"]["decide_by"] = "experiment"  # the lifts are labelled slipped and object only
+    with pytest.raises(InputError, match="trial has no label 'experiment' .*fix "
+                                         "data.decide_by"):
+        train(parse_config(raw), [lifts[0]], tmp_path / "run", command="tests")
+    assert not (tmp_path / "run").exists()
+
+
 def test_the_trunk_needs_every_pixel():
     model = parse_config(_raw()).model
     with pytest.raises(InputError, match="needs every pixel of data.frames \\(48 values"):
