@@ -17,7 +17,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 TACTILE := $(BIN)/tactile
 
-.PHONY: sweep-vibro bench-long bench-scale demo demo-chains demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test test-slow test-all ingest bench lint clean fuzz docs docs-serve docs-figures
+.PHONY: sweep-vibro bench-long bench-scale demo demo-lanes demo-lane-events demo-lane-learn demo-lane-figures demo-lane-data demo-chains demo-events-core demo-events-figures demo-vibro demo-taxel demo-visuo demo-events demo-learn demo-real demo-report test test-slow test-all ingest bench lint clean fuzz docs docs-serve docs-figures
 .DELETE_ON_ERROR:
 
 # torch is pinned to the CPU build that lies on the project machines' disk (a newer or
@@ -66,22 +66,37 @@ demo: $(STAMP)
 	$(TACTILE) ingest $(DEMO)/raw/robot/press_ros2 --mapping configs/rosbag_tactile_rig.yaml --out $(DEMO)/h5/rosbag2.h5
 	$(TACTILE) ingest $(DEMO)/raw/robot/press.mcap --mapping configs/rosbag_tactile_rig.yaml --out $(DEMO)/h5/mcap.h5
 	$(TACTILE) ingest $(DEMO)/raw/robot/press.mp4 $(SAMPLES_LABELS) --out $(DEMO)/h5/video.h5
+	$(MAKE) --no-print-directory -j2 --output-sync=target demo-lanes DEMO=$(DEMO)
+	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
+	$(MAKE) --no-print-directory demo-report DEMO=$(DEMO)
+
+# Two lanes side by side (`make -j2 demo-lanes` in `demo`; every training runs on one thread,
+# so its results do not change; each target's output is printed when it finishes), as one
+# dependency graph that make schedules on two job slots:
+#   learning lane: demo-events-core (the scene, FOS fits, synthetic trials) -> demo-learn;
+#   data lane: the real recordings ingested, every ingested file validated and summarised (a
+#   fixed list, so the other lane's files never enter it), the real-data step and the other
+#   four chains (demo-chains) -> the event chain's figures (demo-events-figures, which also
+#   wait for demo-events-core).
+DEMO_INGESTED := events_csv events_npy accel_tree taxel visuotactile rosbag1 rosbag2 mcap video dvxplorer xela_slip biotac_slide20
+demo-lanes: demo-lane-learn demo-lane-figures
+demo-lane-events: $(STAMP)
+	$(MAKE) --no-print-directory demo-events-core DEMO=$(DEMO)
+demo-lane-learn: demo-lane-events
+	$(MAKE) --no-print-directory demo-learn DEMO=$(DEMO)
+demo-lane-figures: demo-lane-events demo-lane-data
+	$(MAKE) --no-print-directory demo-events-figures DEMO=$(DEMO)
+demo-lane-data: $(STAMP)
 	@if [ -d "$(SHARED)" ]; then \
 	  set -e; echo "real recordings from $(SHARED):"; \
 	  $(TACTILE) ingest $(SHARED)/aedat4/dvxplorer_sample.aedat4 --label origin=recorded --label dataset=dvxplorer_sample --label "lab=iniVation DVXplorer sample, from the tonic project test data" --out $(DEMO)/h5/dvxplorer.h5; \
 	  $(TACTILE) ingest $(SHARED)/xela_slip --mapping configs/xela_slip.yaml --out $(DEMO)/h5/xela_slip.h5; \
 	  $(TACTILE) ingest $(SHARED)/biotac_slide20 --mapping configs/biotac_slide20.yaml --out $(DEMO)/h5/biotac_slide20.h5; \
 	else echo "($(SHARED) not found: real recordings skipped)"; fi
-	$(TACTILE) validate $(DEMO)/h5/*.h5
-	for f in $(DEMO)/h5/*.h5; do $(TACTILE) info "$$f"; done
-	$(MAKE) --no-print-directory demo-events DEMO=$(DEMO)
-	$(MAKE) --no-print-directory -j2 --output-sync=target demo-learn demo-chains DEMO=$(DEMO)
-	$(TACTILE) plot $(DEMO)/h5/*.h5 --out $(DEMO)/quicklook --max-trials 2
-	$(MAKE) --no-print-directory demo-report DEMO=$(DEMO)
+	files=""; for n in $(DEMO_INGESTED); do if [ -f $(DEMO)/h5/$$n.h5 ]; then files="$$files $(DEMO)/h5/$$n.h5"; fi; done; \
+	$(TACTILE) validate $$files && for f in $$files; do $(TACTILE) info "$$f" || exit 1; done
+	$(MAKE) --no-print-directory demo-chains DEMO=$(DEMO)
 
-# Two lanes side by side (`make -j2` in `demo`; every training runs on one thread, so its
-# results do not change; each lane's output is printed when it finishes): the learning chain
-# on one core, the real-data step and the other four chains one after another on the other.
 demo-chains: $(STAMP)
 	$(MAKE) --no-print-directory demo-real DEMO=$(DEMO)
 	$(MAKE) --no-print-directory demo-accel DEMO=$(DEMO)
@@ -96,6 +111,11 @@ demo-chains: $(STAMP)
 # the spatial LSTM (sec. 5.2) -> frames, slip rates and fuzzy force grades.
 SCENE_GROUPS ?= 2
 demo-events: $(STAMP)
+	$(MAKE) --no-print-directory demo-events-core DEMO=$(DEMO)
+	$(MAKE) --no-print-directory demo-events-figures DEMO=$(DEMO)
+
+# What demo-learn needs (the scene, its fits, the synthetic trials), then the figures.
+demo-events-core: $(STAMP)
 	rm -rf $(DEMO)/scene $(DEMO)/events
 	mkdir -p $(DEMO)/events $(DEMO)/h5
 	$(TACTILE) simulate marker-events --out $(DEMO)/scene --groups $(SCENE_GROUPS) --seed 0 --no-progress
@@ -103,6 +123,8 @@ demo-events: $(STAMP)
 	$(TACTILE) accumulate $(DEMO)/h5/scene.h5 --segment --trial g1_level01 --trial g1_level06 --trial g1_level12 --plot $(DEMO)/events/counts --no-progress
 	$(TACTILE) fit-fos $(DEMO)/h5/scene.h5 --plot $(DEMO)/events/fits --csv $(DEMO)/events/fits.csv
 	$(TACTILE) synth --fits $(DEMO)/h5/scene.h5 --centroids $(DEMO)/scene/scene.json --n 240 --seed 1 --out $(DEMO)/h5/synth_train.h5 --overwrite
+
+demo-events-figures: $(STAMP)
 	$(TACTILE) frames $(DEMO)/h5/scene.h5 --trial g1_level06 --rois $(DEMO)/scene/scene.json --window-ms 100 --median 3 --sheet-only --out $(DEMO)/events/frames
 	$(TACTILE) slip-rate $(DEMO)/h5/scene.h5 --rois $(DEMO)/scene/scene.json --plot $(DEMO)/events/slip
 	$(TACTILE) grade $(DEMO)/h5/scene.h5 --plot $(DEMO)/events/grade

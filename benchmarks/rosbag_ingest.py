@@ -11,9 +11,13 @@ child processes (imports off the clock):
   and deserialising it (rosbags ``AnyReader`` + its typestore for bags; ``mcap``'s reader +
   the same typestore for MCAP): the floor of any ingest of these messages;
 - **tactile ingest**: ``tactile_cli.ingest.ingest`` end to end with
-  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames,
-  deflated in the store's thread pool, and signals, SHA-256 of the recording, schema
-  validation, atomic rename).
+  ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames
+  and signal chunks, deflated by ISA-L in the store's thread pool, SHA-256 of the
+  recording in a thread beside the reading, schema validation, atomic rename).
+
+``--taxel-grid 20 60`` makes the taxel array 1,200 values (a Tac3D-sized sensor) at 1 kHz,
+4.8 MB/s of values: then the arrays, not the frames, make most of the recording, which is
+what tests that memory does not grow with a trial's sample rows.
 
 Rates are recording bytes / wall seconds (MB = 10^6 bytes); ``ratio`` = ingest / reader
 alone (target >= 0.70); ``peak_rss_mb`` is the ingest child's ``VmHWM`` (target: well under
@@ -51,6 +55,11 @@ IMAGE_HW = (240, 320)
 IMAGE_HZ, ARRAY_HZ = 30.0, 1000.0
 #: Bytes per second of recording (frames dominate): for sizing the recording.
 BYTES_PER_S = IMAGE_HZ * (IMAGE_HW[0] * IMAGE_HW[1] * 3 + 120) + ARRAY_HZ * (120 + 200)
+
+
+def bytes_per_s(taxel_grid: tuple[int, int]) -> float:
+    """:data:`BYTES_PER_S` with a taxel array of ``taxel_grid`` values (4 bytes each)."""
+    return BYTES_PER_S + ARRAY_HZ * 4 * (taxel_grid[0] * taxel_grid[1] - 16)
 
 
 def _peak_rss_mb() -> float:
@@ -154,6 +163,9 @@ def main() -> None:
                         help="gzip level of the ingest (-1: none; 1 is the CLI default)")
     parser.add_argument("--video-s", type=float, default=30.0,
                         help="seconds of the MP4 of the video comparison (0: skip it)")
+    parser.add_argument("--taxel-grid", type=int, nargs=2, default=(4, 4), metavar=("ROWS", "COLS"),
+                        help="taxel array size (20 60: a Tac3D-sized array of 1,200 values at "
+                             "1 kHz, where the arrays, not the frames, make most of the bytes)")
     parser.add_argument("--child", nargs=4, metavar=("KIND", "SRC", "OUT", "LEVEL"),
                         help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -163,9 +175,10 @@ def main() -> None:
         return
     from tactile_cli.samples import robot
 
-    seconds = max(1.0, args.mb * 1e6 / BYTES_PER_S)
+    grid = tuple(args.taxel_grid)
+    seconds = max(1.0, args.mb * 1e6 / bytes_per_s(grid))
     kw = {"seconds": seconds, "n_trials": 1, "image_hz": IMAGE_HZ, "size_hw": IMAGE_HW,
-          "array_hz": ARRAY_HZ, "seed": 0}
+          "array_hz": ARRAY_HZ, "taxel_grid": grid, "seed": 0}
     with tempfile.TemporaryDirectory(prefix="rosbag-bench-") as tmp:
         root = Path(tmp)
         t0 = time.perf_counter()
@@ -187,7 +200,7 @@ def main() -> None:
     result = {
         "container": args.container, "recording_mb": round(size / 1e6, 1),
         "recording_s": round(seconds, 1), "messages": int(reader[0]["messages"]),
-        "image_hw": list(IMAGE_HW), "write_s": round(write_s, 1),
+        "image_hw": list(IMAGE_HW), "taxel_grid": list(grid), "write_s": round(write_s, 1),
         "reader_alone_s": round(reader_s, 2), "ingest_s": round(ingest_s, 2),
         "reader_alone_mb_s": round(size / 1e6 / reader_s, 1),
         "ingest_mb_s": round(size / 1e6 / ingest_s, 1),

@@ -46,7 +46,7 @@ RULES: dict[str, set[str]] = {
     "__main__": {"cli"},
 }
 #: Third-party packages that one package alone may import, and that package.
-OWNERS = {"h5py": {"store"}, "typer": {"cli"}, "torch": {"learn"},
+OWNERS = {"h5py": {"store"}, "isal": {"store"}, "typer": {"cli"}, "torch": {"learn"},
           "onnx": {"learn"}, "onnxruntime": {"learn"}, "onnxscript": {"learn"},
           "skl2onnx": {"learn"},
           "jax": {"fos"}, "optimistix": {"fos"}, "dask": {"batch"}, "distributed": {"batch"}}

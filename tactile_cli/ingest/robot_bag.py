@@ -27,10 +27,14 @@ topics.yaml`` makes the topics the mapping names into streams of each trial (the
 
 Time: each stream takes its messages' header stamps (``time: header``, the default; log time
 for a message type without a header, or when every header stamp is 0) or their log times
-(``time: log``). Stamps that go back are refused with their count unless ``sort_stamps``:
-samples are then sorted (stable) per trial; frames, which are streamed to the file, are
-sorted (stable) within a window of half a frame batch (:data:`FRAME_BATCH_BYTES`; about 18
-frames of 320x240 RGB), and a frame going back further than that is one error. Every
+(``time: log``). Sampled streams are written in blocks of
+:data:`~tactile_cli.store.writer.SIGNAL_CHUNK_BYTES` of values as they come, so memory does
+not grow with a trial's length (a trial within one block is written in one piece). Stamps
+that go back are refused with their count unless ``sort_stamps``: samples are then sorted
+(stable) per trial, once the trial is written (reading its values back); frames, which are
+streamed to the file, are sorted (stable) within a window of half a frame batch
+(:data:`FRAME_BATCH_BYTES`; about 18 frames of 320x240 RGB), and a frame going back further
+than that is one error. Every
 stream's rate, jitter and gaps (intervals over twice the median) are returned as a note and
 kept as sensor attributes (``rate_hz`` in ``sample_rate_hz``, ``jitter_s``, ``gaps``,
 ``longest_gap_s``), beside the identity the recording and the mapping give: ``topic``,
@@ -53,7 +57,7 @@ import numpy as np
 from ..errors import InputError
 from ..progress import Progress
 from ..store.provenance import sha256_of
-from ..store.writer import StoreWriter
+from ..store.writer import SIGNAL_CHUNK_BYTES, StoreWriter
 from .contract import FormatOptions, IngestFormat, RecordingSummary, StreamSummary, TrialSummary
 from .robot_messages import (
     check_path,
@@ -204,6 +208,18 @@ class _Trial:
 
 
 @dataclass
+class _Rows:
+    """A sampled stream's rows of one trial not yet written (at most one block of
+    :data:`~tactile_cli.store.writer.SIGNAL_CHUNK_BYTES` of values), and the appender that
+    takes each full block; a trial that ends within its first block is written in one
+    piece."""
+
+    values: list[np.ndarray] = field(default_factory=list)
+    t_ns: list[int] = field(default_factory=list)
+    appender: Any = None  # SignalAppender, made when the first block is full
+
+
+@dataclass
 class _Stream:
     """What one mapped topic has gathered so far."""
 
@@ -216,8 +232,9 @@ class _Stream:
     n: int = 0
     outside: int = 0
     late: int = 0
-    stamps: dict[int, list[int]] = field(default_factory=dict)  # trial -> stamps (ns)
-    values: dict[int, list[np.ndarray]] = field(default_factory=dict)  # trial -> rows
+    stamps: dict[int, list[int]] = field(default_factory=dict)  # trial -> frame/event stamps
+    rows_of: dict[int, _Rows] = field(default_factory=dict)  # trial -> sampled rows
+    block_rows: int = 0  # rows per block of a sampled stream (from its channel count)
     frames: dict[int, Any] = field(default_factory=dict)  # trial -> FrameAppender or buffer
     events: dict[int, Any] = field(default_factory=dict)  # trial -> EventAppender
     size_hw: tuple[int, int] | None = None
@@ -319,7 +336,8 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
             progress.advance(1)
         progress.finish()
         for st in by_topic.values():
-            for k in sorted(set(st.stamps) | set(st.frames) | set(st.events)):
+            for k in sorted(set(st.stamps) | set(st.rows_of) | set(st.frames)
+                            | set(st.events)):
                 _flush(st, k, trials, rec, writer, options)
             if st.outside:
                 notes.append(f"{st.spec.name} ({st.spec.topic}): {st.outside} message(s) "
@@ -354,7 +372,8 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
     st.n += 1
     if k > st.newest:  # trials before the one before this message's are complete
         st.newest = k
-        for done in [j for j in (set(st.stamps) | set(st.frames) | set(st.events)) if j < k - 1]:
+        for done in [j for j in (set(st.stamps) | set(st.rows_of) | set(st.frames)
+                                 | set(st.events)) if j < k - 1]:
             _flush(st, done, trials, rec, writer, options)
     spec = st.spec
     if spec.is_frames:
@@ -365,13 +384,31 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
         if st.rows is None:
             st.rows = row_reader(rec, spec.topic, st.msgtype, msg, spec.fields)
             _check_names(st, rec)
+            st.block_rows = max(1, SIGNAL_CHUNK_BYTES // (4 * max(1, len(st.rows.channels))))
         row = st.rows.read(msg)
         if len(row) != len(st.rows.channels):
             raise InputError(f"topic {spec.topic}, message {index}: {len(row)} values, but the "
                              f"first message gave {len(st.rows.channels)}; a stream keeps one "
                              "channel count", path=rec.path)
-        st.values.setdefault(k, []).append(row)
-        st.stamps.setdefault(k, []).append(t_ns)
+        rows = st.rows_of.get(k)
+        if rows is None:
+            rows = st.rows_of[k] = _Rows()
+        rows.values.append(row)
+        rows.t_ns.append(t_ns)
+        if len(rows.t_ns) >= st.block_rows:
+            _spill(st, rows, trials[k])
+
+
+def _spill(st: _Stream, rows: _Rows, trial: _Trial) -> None:
+    """Write the rows gathered for ``trial`` to its stream and forget them."""
+    if not rows.t_ns:
+        return
+    if rows.appender is None:
+        rows.appender = trial.writer.signal(st.spec.name, sensor=st.spec.name,
+                                            n_channels=len(st.rows.channels))
+    t_s = (np.asarray(rows.t_ns, dtype=np.int64) - trial.span.start_ns) / 1e9
+    rows.appender.append(np.vstack(rows.values), t_s)
+    rows.values, rows.t_ns = [], []
 
 
 def _check_names(st: _Stream, rec: RobotRecording) -> None:
@@ -527,20 +564,27 @@ def _flush(st: _Stream, k: int, trials: list[_Trial], rec: RobotRecording, write
         appender.close(t_origin_us=origin // 1000)
         st.stamps.pop(k, None)
         return
-    t_ns = np.asarray(st.stamps.pop(k), dtype=np.int64)
-    data = np.vstack(st.values.pop(k))
-    back = int(np.count_nonzero(np.diff(t_ns) < 0))
-    if back:
-        if not options.sort_stamps:
-            raise InputError(f"stream {spec.name} (topic {spec.topic}): {back} stamp(s) go back "
-                             f"in trial {trial.span.name}; pass `sort_stamps=True` to sort the "
-                             "samples by stamp, or map the topic with `time: log`",
-                             path=rec.path)
-        order = np.argsort(t_ns, kind="stable")
-        t_ns, data = t_ns[order], data[order]
-        st.late += back
-    t_s = (t_ns - origin) / 1e9
-    trial.writer.write_signal(spec.name, sensor=spec.name, data=data, t_s=t_s)
+    rows = st.rows_of.pop(k)
+    if rows.appender is None:  # the whole trial fits one block: written in one piece
+        t_ns = np.asarray(rows.t_ns, dtype=np.int64)
+        back = int(np.count_nonzero(np.diff(t_ns) < 0))
+    else:
+        _spill(st, rows, trial)
+        back = rows.appender.back
+    if back and not options.sort_stamps:
+        raise InputError(f"stream {spec.name} (topic {spec.topic}): {back} stamp(s) go back "
+                         f"in trial {trial.span.name}; pass `sort_stamps=True` to sort the "
+                         "samples by stamp, or map the topic with `time: log`", path=rec.path)
+    st.late += back
+    if rows.appender is None:
+        data = np.vstack(rows.values)
+        if back:
+            order = np.argsort(t_ns, kind="stable")
+            t_ns, data = t_ns[order], data[order]
+        t_s = (t_ns - origin) / 1e9
+        trial.writer.write_signal(spec.name, sensor=spec.name, data=data, t_s=t_s)
+    else:
+        t_s = rows.appender.close(sort=True)
     st.timing_all.append(t_s)
 
 

@@ -72,7 +72,10 @@ class RunSummary:
 
 
 def is_run_folder(path: str | Path) -> bool:
-    """``path`` is a folder holding ``run.json`` (what ``tactile train`` writes)."""
+    """``path`` is a folder holding ``run.json`` (what ``tactile train`` writes). A file
+    path is answered without importing the run module (and torch with it)."""
+    if not Path(path).is_dir():
+        return False
     from .runs import RUN_JSON
 
     return Path(path).is_dir() and (Path(path) / RUN_JSON).is_file()

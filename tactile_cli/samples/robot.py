@@ -68,9 +68,12 @@ def press_force_n(t_s: np.ndarray) -> np.ndarray:
 
 def rig_stream(*, ros1: bool, seconds: float = 1.0, n_trials: int = 2, image_hz: float = 30.0,
                size_hw: tuple[int, int] = (30, 40), array_hz: float = 200.0,
+               taxel_grid: tuple[int, int] = (4, 4),
                seed: int = 0) -> Iterator[tuple[int, str, str, Any]]:
     """``(log_ns, topic, msgtype, message)`` of ``n_trials`` presses of ``seconds`` each, in
-    log-time order (rosbags message objects of the ROS generation asked for)."""
+    log-time order (rosbags message objects of the ROS generation asked for).
+    ``taxel_grid``: (rows, cols) of the taxel array (4x4; 20x60 is a Tac3D-sized array of
+    1,200 values)."""
     store = _types(ros1)
     T = store.types
     rng = np.random.default_rng(seed)
@@ -79,14 +82,17 @@ def rig_stream(*, ros1: bool, seconds: float = 1.0, n_trials: int = 2, image_hz:
     background = np.stack([90 + 70 * x / max(1, w - 1), 80 + 70 * y / max(1, h - 1),
                            np.full_like(x, 140.0)], axis=-1)
     d2 = (x - w / 2) ** 2 + (y - h / 2) ** 2
-    gy, gx = np.mgrid[0:4, 0:4]
-    patch = np.exp(-((gx - 1.5) ** 2 + (gy - 1.5) ** 2) / 2.0).ravel()
+    rows, cols = taxel_grid
+    gy, gx = np.mgrid[0:rows, 0:cols]
+    patch = np.exp(-((gx - (cols - 1) / 2) ** 2 + (gy - (rows - 1) / 2) ** 2)
+                   / (2.0 * max(1.0, rows * cols / 16))).ravel()
     V = T["geometry_msgs/msg/Vector3"]
     Time = T["builtin_interfaces/msg/Time"]
     Header = T["std_msgs/msg/Header"]
     MD = T["std_msgs/msg/MultiArrayDimension"]
     layout = T["std_msgs/msg/MultiArrayLayout"](
-        dim=[MD(label="row", size=4, stride=16), MD(label="col", size=4, stride=4)],
+        dim=[MD(label="row", size=rows, stride=rows * cols),
+             MD(label="col", size=cols, stride=cols)],
         data_offset=0)
 
     def header(ns: int, frame: str) -> Any:
@@ -128,7 +134,7 @@ def rig_stream(*, ros1: bool, seconds: float = 1.0, n_trials: int = 2, image_hz:
                 header=header(stamp_ns, "digit_D20001"), height=h, width=w, encoding="rgb8",
                 is_bigendian=0, step=w * 3, data=data)
         elif kind == "taxel":
-            values = (force * 4.0 * patch + rng.normal(0, 0.05, 16)).astype(np.float32)
+            values = (force * 4.0 * patch + rng.normal(0, 0.05, rows * cols)).astype(np.float32)
             yield log_ns, "/taxels", "std_msgs/msg/Float32MultiArray", T[
                 "std_msgs/msg/Float32MultiArray"](layout=layout, data=values)
         else:

@@ -7,11 +7,13 @@ exception (including ``KeyboardInterrupt``) deletes the temporary file and leave
 earlier output untouched.
 
 Compression uses only HDF5's built-in filters (shuffle + gzip), so any HDF5 reader can
-open the files.
+open the files (frame chunks at level 1 are deflated by ISA-L, whose zlib streams the
+gzip filter reads like any other: :mod:`.deflate`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -38,6 +40,7 @@ from .atomic import (
     temporary_path,
     write_error,
 )
+from .deflate import deflate_chunk
 from .provenance import current_command, sha256_of, utc_now
 from .spec import load_spec
 from .trials import attr_value
@@ -109,6 +112,54 @@ def validate_and_swap(tmp: Path, dest: Path, *, verified: Collection[str] = (), 
         LIVE_TEMPORARIES.discard(tmp)
 
 
+class _Digest:
+    """The SHA-256 of one source file. A file of :data:`THREAD_BYTES` or more is hashed in a
+    daemon thread while the ingest reads it (hashlib releases the GIL on large blocks), so
+    the 2-3 s a 1 GB recording takes to hash overlap the reading instead of adding to it;
+    :meth:`result` waits for it. A smaller file is hashed at once."""
+
+    THREAD_BYTES = 8 << 20
+    BLOCK = 1 << 22
+
+    def __init__(self, path: Path, size: int):
+        self._value: str | None = None
+        self._error: BaseException | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        if size < self.THREAD_BYTES:
+            self._value = sha256_of(path)
+            return
+        self._thread = threading.Thread(target=self._run, args=(path,), daemon=True,
+                                        name="tactile-sha256")
+        self._thread.start()
+
+    def _run(self, path: Path) -> None:
+        try:
+            h = hashlib.sha256()
+            with open(path, "rb") as f:
+                while (chunk := f.read(self.BLOCK)) and not self._stop.is_set():
+                    h.update(chunk)
+            self._value = h.hexdigest()
+        except BaseException as exc:  # re-raised in the caller's thread by result()
+            self._error = exc
+
+    def result(self) -> str:
+        """The hex digest (waits for the thread); a read error is raised here."""
+        if self._thread is not None:
+            while self._thread.is_alive():
+                raise_if_requested()
+                self._thread.join(0.1)
+        if self._error is not None:
+            raise self._error
+        if self._stop.is_set() or self._value is None:
+            raise RuntimeError("the source's SHA-256 was cancelled")
+        return self._value
+
+    def cancel(self) -> None:
+        """Stop hashing (the writer was aborted)."""
+        self._stop.set()
+
+
 class StoreWriter:
     """Build one tactile HDF5 file and move it into place only when it is valid.
 
@@ -143,7 +194,7 @@ class StoreWriter:
         self.compression = compression
         #: datasets whose content the write path already checked with the schema's rules
         self.verified: set[str] = set()
-        self._sources: list[tuple[str, int, str]] = []
+        self._sources: list[tuple[str, int, _Digest]] = []
         self._source_index: dict[str, int] = {}
         self._committed = False
         spec = load_spec()
@@ -186,6 +237,8 @@ class StoreWriter:
 
     def abort(self) -> None:
         """Close and delete the temporary file; the output path is not touched."""
+        for _, _, digest in self._sources:
+            digest.cancel()
         if self._h5 is not None:
             try:
                 self._h5.close()
@@ -206,7 +259,8 @@ class StoreWriter:
             "size_bytes", data=np.array([s[1] for s in self._sources], dtype=np.int64)
         )
         src.create_dataset(
-            "sha256", data=np.array([s[2] for s in self._sources], dtype=object), dtype=_STR
+            "sha256", data=np.array([s[2].result() for s in self._sources], dtype=object),
+            dtype=_STR
         )
         h5.close()
         self._h5 = None
@@ -218,12 +272,15 @@ class StoreWriter:
 
     # -- content --------------------------------------------------------------------
     def add_source(self, path: str | Path) -> int:
-        """Record a source file (path as given, size, SHA-256); returns its index."""
+        """Record a source file (path as given, size, SHA-256); returns its index. The
+        SHA-256 of a large file is computed in a thread while the caller reads the file
+        (:class:`_Digest`) and written at :meth:`commit`."""
         key = str(path)
         if key not in self._source_index:
             p = Path(path)
+            size = p.stat().st_size
             self._source_index[key] = len(self._sources)
-            self._sources.append((key, p.stat().st_size, sha256_of(p)))
+            self._sources.append((key, size, _Digest(p, size)))
         return self._source_index[key]
 
     def add_sensor(
@@ -439,6 +496,12 @@ class TrialWriter:
             self._extend_duration(t_s[-1] - min(0.0, float(t_s[0])))
         return group
 
+    def signal(self, stream: str, *, sensor: str, n_channels: int) -> SignalAppender:
+        """An appender for one sampled stream of this trial, written in blocks as it comes:
+        memory holds the caller's block, not the stream (:meth:`write_signal` writes one
+        held in memory)."""
+        return SignalAppender(self, stream, sensor, n_channels)
+
     def write_frames(
         self, *, sensor: str, images: np.ndarray, t_s: np.ndarray, reference: np.ndarray
     ) -> None:
@@ -468,12 +531,13 @@ class FrameAppender:
     check user files first and raise :class:`InputError` naming the file.
 
     Why it is fast: with compression on, each frame (one chunk) is deflated in the
-    process-wide pool of :class:`EventAppender` (zlib runs without the GIL, so the cores
-    compress while the caller decodes its next frames) and the main thread writes the
-    finished chunks in frame order with HDF5's direct chunk write. The stored bytes are
-    exactly those HDF5's shuffle + gzip filters produce: shuffle leaves 1-byte elements as
-    they are, and deflate is zlib ``compress2`` at the same level; a frame chunk is never
-    partial. The result does not depend on the pool size (each chunk is compressed alone and
+    process-wide pool of :class:`EventAppender` (the compressors run without the GIL, so
+    the cores compress while the caller decodes its next frames) and the main thread writes
+    the finished chunks in frame order with HDF5's direct chunk write. Each chunk is a zlib
+    stream HDF5's shuffle + gzip filters read (shuffle leaves 1-byte elements as they are):
+    at gzip level 1 made by ISA-L, about 6 times as fast as zlib; at other levels byte for
+    byte what HDF5's own filter writes (:mod:`.deflate`); a frame chunk is never partial.
+    The result does not depend on the pool size (each chunk is compressed alone and
     written at its own place). Chunks still in flight are written by :meth:`close`.
     """
 
@@ -546,7 +610,7 @@ class FrameAppender:
             pool = EventAppender._executor()
             for i in range(k):  # tobytes: the caller may reuse its array after this returns
                 frame = np.ascontiguousarray(images[i]).tobytes()
-                self._pending.append((start + i, pool.submit(zlib.compress, frame,
+                self._pending.append((start + i, pool.submit(deflate_chunk, frame,
                                                              self._level)))
                 self._write_ready(self._max_pending)
         self._t_s.resize((start + k,))
@@ -573,6 +637,132 @@ class FrameAppender:
         if self.t_first is not None and self.t_last is not None:
             self.trial._extend_duration(self.t_last - min(0.0, self.t_first))
         return self.n
+
+
+class SignalAppender:
+    """Append the samples of one sampled stream in blocks (``/trials/{trial}/signals/
+    {stream}``: ``data`` (n_samples, n_channels) float32, ``t_s`` (n_samples,) float64
+    seconds from the trial's time origin), chunked and compressed as
+    :meth:`TrialWriter.write_signal` does, so a reader cannot tell the two apart.
+
+    Times may go back between or within blocks: :attr:`back` counts the samples whose stamp
+    is earlier than the one before, and :meth:`close` either sorts the stream by time
+    (``sort=True``, stable; this reads the stream's values back, 4 bytes per value) or
+    leaves the decision to the caller, who refuses the input. :meth:`close` sets the trial
+    duration.
+
+    Why it is fast: a block of :attr:`chunk_rows` rows that starts on a chunk boundary (what
+    a caller that appends whole chunks gives) is shuffled and deflated in the store's pool,
+    as frames are (:class:`FrameAppender`, :mod:`.deflate`), and written with HDF5's direct
+    chunk write in row order; any other block goes through h5py's own filters, after the
+    chunks in flight. Wide streams (a 1,200-value taxel array at 1 kHz is 4.8 MB/s) would
+    otherwise spend most of an ingest in the main thread's zlib."""
+
+    def __init__(self, trial: TrialWriter, stream: str, sensor: str, n_channels: int):
+        if n_channels < 1:
+            raise ValueError(f"`n_channels` must be at least 1, got {n_channels}")
+        self.trial = trial
+        self.n_channels = int(n_channels)
+        signals = (trial.group["signals"] if "signals" in trial.group
+                   else trial.group.create_group("signals", track_order=True))
+        self.group = signals.create_group(safe_name(stream))
+        self.group.attrs["sensor"] = safe_name(sensor)
+        comp = trial.store.compression.kwargs()
+        rows = self.chunk_rows = max(1, SIGNAL_CHUNK_BYTES // (4 * self.n_channels))
+        self._level = trial.store.compression.level
+        self._pending: deque[tuple[int, Future[bytes]]] = deque()  # (first row, deflate job)
+        self._max_pending = FrameAppender.IN_FLIGHT_PER_WORKER * EventAppender._pool_size()
+        self._data = self.group.create_dataset(
+            "data", shape=(0, self.n_channels), maxshape=(None, self.n_channels),
+            dtype=np.float32, chunks=(rows, self.n_channels), **comp)
+        self._t_s = self.group.create_dataset(
+            "t_s", shape=(0,), maxshape=(None,), dtype=np.float64,
+            chunks=(FrameAppender.TIME_CHUNK * 8,), **comp)
+        self.n = 0
+        self.back = 0
+        self._times: list[np.ndarray] = []  # times not yet written (less than a chunk)
+        self._n_times = 0
+        self._last: float | None = None
+        self._finite = True  # every value appended is finite
+        self._increasing = True  # every time is later than the one before
+
+    def append(self, data: np.ndarray, t_s: np.ndarray) -> None:
+        """Append samples: data (k, n_channels) values in the sensor's units (stored
+        float32), t_s (k,) finite seconds."""
+        raise_if_requested()
+        data = np.asarray(data, dtype=np.float32)
+        t_s = np.atleast_1d(np.asarray(t_s, dtype=np.float64))
+        if data.ndim != 2 or data.shape[1] != self.n_channels or len(data) != len(t_s):
+            raise ValueError(f"`data` must be (k, {self.n_channels}) with one time per row, "
+                             f"got {data.shape} and {t_s.shape} times")
+        if len(t_s) == 0:
+            return
+        if not np.isfinite(t_s).all():
+            raise ValueError("`t_s` has non-finite values (NaN or inf)")
+        step = np.diff(t_s, prepend=self._last if self._last is not None else t_s[0] - 1.0)
+        self.back += int(np.count_nonzero(step < 0))
+        self._increasing = self._increasing and bool((step > 0).all())
+        self._finite = self._finite and bool(np.isfinite(data).all())
+        self._last = float(t_s[-1])
+        start, k = self.n, len(t_s)
+        self._data.resize((start + k, self.n_channels))
+        if self._level is not None and k == self.chunk_rows and start % k == 0:
+            own = np.array(data, dtype=np.float32, order="C")  # the caller may reuse `data`
+            self._pending.append((start, EventAppender._executor().submit(
+                self._shuffle_deflate, own, self._level)))
+            self._write_ready(self._max_pending)
+        else:
+            self._write_ready(0)
+            self._data[start:] = data
+        self._times.append(t_s.copy())
+        self._n_times += k
+        if self._n_times >= self._t_s.chunks[0]:
+            self._write_times()
+        self.n += k
+
+    def _write_times(self) -> None:
+        """Write the times held back (one h5py write per chunk of times, not per block)."""
+        if not self._times:
+            return
+        t_s = np.concatenate(self._times)
+        start = self._t_s.shape[0]
+        self._t_s.resize((start + len(t_s),))
+        self._t_s[start:] = t_s
+        self._times, self._n_times = [], 0
+
+    @staticmethod
+    def _shuffle_deflate(chunk: np.ndarray, level: int) -> bytes:
+        """One (chunk_rows, n_channels) float32 chunk as HDF5's shuffle (byte 0 of every
+        value, then byte 1, ...) and gzip filters store it; runs in the pool."""
+        return deflate_chunk(np.ascontiguousarray(chunk.view(np.uint8).reshape(-1, 4).T), level)
+
+    def _write_ready(self, keep: int) -> None:
+        """Write deflated chunks in row order until at most ``keep`` jobs are in flight."""
+        while len(self._pending) > keep:
+            row, job = self._pending.popleft()
+            self._data.id.write_direct_chunk((row, 0), job.result())
+
+    def close(self, *, sort: bool = False) -> np.ndarray:
+        """Finish the stream (sorted by time when ``sort`` and a stamp went back); returns
+        its times (n_samples,) in seconds, as stored."""
+        self._write_ready(0)
+        self._write_times()
+        t_s = self._t_s[:]
+        if sort and self.back:
+            order = np.argsort(t_s, kind="stable")
+            t_s = t_s[order]
+            self._t_s[:] = t_s
+            self._data[:] = self._data[:][order]
+            self._increasing = bool((np.diff(t_s) > 0).all())
+        # what the schema's value scans check was checked on the way in: the commit need not
+        # inflate the stream again (as for frames and events); otherwise it finds what broke
+        if self._increasing:
+            self.trial.store.verified.add(f"{self._t_s.name}")
+        if self._finite:
+            self.trial.store.verified.add(f"{self._data.name}")
+        if len(t_s):
+            self.trial._extend_duration(t_s[-1] - min(0.0, float(t_s.min())))
+        return t_s
 
 
 #: Timestamps below this (2**40 us, about 12.7 days) are taken as relative to the trial

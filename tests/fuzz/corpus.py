@@ -113,6 +113,10 @@ def build_bases(root: Path) -> Path:
         csv.write_bytes(b"".join(lines))
     if AEDAT4.exists():
         shutil.copyfile(AEDAT4, raw / "events.aedat4")
+    if (raw / "robot").exists():
+        from .robot_cases import write_robot_cases
+
+        write_robot_cases(raw / "robot_cases")
 
     h5 = base / "h5"
     h5.mkdir()
@@ -533,6 +537,14 @@ _BOMB = b"a: &a [x, x, x, x, x, x, x, x, x]\n" + b"".join(
     for p, c in zip("abcdefgh", "bcdefghi", strict=True))
 
 
+def _replace_text(old: str, new: str) -> Callable[[Path], None]:
+    def apply(p: Path) -> None:
+        text = p.read_text()
+        assert old in text, f"{p} has no {old!r} to replace"
+        p.write_text(text.replace(old, new))
+    return apply
+
+
 def _truncate_text(p: Path) -> None:
     data = p.read_bytes()
     p.write_bytes(data[: len(data) // 2])
@@ -820,6 +832,33 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
             d = add("video", robot / "press.mp4", "press.mp4", mutation, "raw", apply)
             case(d, "ingest", ingest_video, REFUSE)
             case(d, "info", info_raw, EITHER)
+        # well-formed recordings with one fault in what they hold (robot_cases.py)
+        from .robot_cases import CASES as ROBOT_CASES
+
+        for mutation, (file, stream) in ROBOT_CASES.items():
+            d = add("robot-content", raw / "robot_cases" / file, file, mutation, "raw", None)
+            argv = (["ingest", "{IN}", "--out", "{OUT}/o.h5", "--no-progress"]
+                    if stream is None else
+                    ["ingest", "{IN}", "--mapping",
+                     f"{{BASE}}/raw/robot_cases/{Path(file).stem}.yaml", "--out", "{OUT}/o.h5",
+                     "--no-progress"])
+            case(d, "ingest", argv, REFUSE)
+            case(d, "info", info_raw, EITHER)
+        # the sample bag under a topic mapping that does not fit it
+        ingest_by_map = ["ingest", "{BASE}/raw/robot/press.bag", "--mapping", "{IN}",
+                         "--out", "{OUT}/o.h5", "--no-progress"]
+        for mutation, apply in [
+            ("topic-missing", _replace_text("/taxels", "/gelsight")),
+            ("field-path-missing", _replace_text(
+                "kind: force_torque", "kind: force_torque\n    fields: [wrench.force.w]")),
+            ("kind-unknown", _replace_text("kind: taxel_array", "kind: skin")),
+            ("kind-wrong-for-type", _replace_text("kind: force_torque", "kind: visuotactile")),
+            ("reference-beyond-frames", _replace_text("reference: first", "reference: 9999")),
+            ("marker-topic-missing", _replace_text("/trial_marker", "/no_marker")),
+        ]:
+            d = add("topic-mapping", robot / "topics.yaml", "topics.yaml", mutation, "raw",
+                    apply)
+            case(d, "ingest", ingest_by_map, REFUSE)
     # annotations and trial labels of an ingest
     for name, flag in (("annotations.csv", "--annotations"),
                        ("trial_labels.csv", "--trial-labels")):

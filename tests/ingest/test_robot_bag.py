@@ -95,8 +95,16 @@ def test_info_with_mapping_names_streams_trials_and_topics_left_out(recordings, 
                                "mapping"]
 
 
+@pytest.mark.parametrize("block_bytes", [None, 64], ids=["one-piece", "2-row-blocks"])
 @pytest.mark.parametrize("kind", KINDS)
-def test_ingest_round_trips_every_value_and_stamp(recordings, mapping, tmp_path, kind):
+def test_ingest_round_trips_every_value_and_stamp(recordings, mapping, tmp_path, kind,
+                                                  block_bytes, monkeypatch):
+    """Also with sampled streams written in blocks of 2-3 rows (as a long trial is, in
+    blocks of 256 KiB of values): the same values and stamps."""
+    if block_bytes is not None:
+        from tactile_cli.ingest import robot_bag
+
+        monkeypatch.setattr(robot_bag, "SIGNAL_CHUNK_BYTES", block_bytes)
     path, rig = recordings[kind]
     notes: list[str] = []
     out = ingest([path], tmp_path / "o.h5", options={"mapping": mapping}, on_note=notes.append)

@@ -155,7 +155,14 @@ def test_imu_and_joint_state_with_units(tmp_path):
         assert list(h5["sensors/arm/channel_units"].asstr()[:]) == ["rad"] * 2 + ["rad/s"] * 2
 
 
-def test_header_stamps_that_go_back_are_counted_and_sorted_only_when_asked(tmp_path):
+@pytest.mark.parametrize("block_bytes", [None, 48], ids=["one-piece", "2-row-blocks"])
+def test_header_stamps_that_go_back_are_counted_and_sorted_only_when_asked(
+        tmp_path, block_bytes, monkeypatch):
+    """With 2-row blocks both stamps that go back cross a block boundary."""
+    if block_bytes is not None:
+        from tactile_cli.ingest import robot_bag
+
+        monkeypatch.setattr(robot_bag, "SIGNAL_CHUNK_BYTES", block_bytes)
     stamps = [0, 10, 5, 20, 15, 30]  # ms: two go back
     V = T["geometry_msgs/msg/Vector3"]
     msgs = [(T0_NS + i * 10**7, T["geometry_msgs/msg/WrenchStamped"](
@@ -183,5 +190,8 @@ def test_header_stamps_that_go_back_are_counted_and_sorted_only_when_asked(tmp_p
     with h5py.File(out) as h5:
         np.testing.assert_array_equal(h5["trials/ft/signals/ft/t_s"][:],
                                       np.array([0, 5, 10, 15, 20, 30]) / 1e3)
-        np.testing.assert_array_equal(h5["trials/ft/signals/ft/data"][:, 0], [0, 2, 1, 4, 3, 5])
+        # the force x of message i is i: the values moved with their stamps
+        np.testing.assert_array_equal(h5["trials/ft/signals/ft/data"][:, 0],
+                                      [0, 2, 1, 4, 3, 5])
+        assert h5["trials/ft"].attrs["duration_s"] == 0.03
     assert any("2 stamp(s) that went back were sorted" in n for n in notes)
