@@ -5,9 +5,8 @@ pool size."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import zlib
+from pathlib import Path
 
 import h5py
 import numpy as np
