@@ -199,3 +199,19 @@ def write_mcap(path: Path, rig: Rig, store: Any) -> Path:
 
 __all__ = ["CUSTOM_TYPE", "HEADER_LAG_NS", "T0_NS", "Rig", "rig_messages", "typestore",
            "write_mcap", "write_ros1_bag", "write_ros2_bag"]
+
+
+def write_mcap_without_definition(path: Path) -> Path:
+    """A standalone MCAP file whose one topic ``/pad`` has the custom type
+    :data:`CUSTOM_TYPE` with an empty definition (what a recorder that stores no message
+    definitions writes): one message."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2")
+        schema = w.register_schema(CUSTOM_TYPE, "ros2msg", b"")
+        channel = w.register_channel("/pad", "cdr", schema)
+        w.add_message(channel, log_time=1, publish_time=1, data=b"\x00\x01\x00\x00")
+        w.finish()
+    return path

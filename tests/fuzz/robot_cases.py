@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tests.factories.robot_recordings import CUSTOM_TYPE, T0_NS
+from tests.factories.robot_recordings import T0_NS, write_mcap_without_definition
 
 #: case name -> (recording file name, the mapping's one stream line)
 CASES = {
@@ -98,18 +98,6 @@ def _bad_jpeg(path: Path) -> None:
     _write_bag(path, "/cam/compressed", "sensor_msgs/msg/CompressedImage", msgs)
 
 
-def _no_definition(path: Path) -> None:
-    from mcap.writer import Writer
-
-    with open(path, "wb") as f:
-        w = Writer(f)
-        w.start(profile="ros2")
-        schema = w.register_schema(CUSTOM_TYPE, "ros2msg", b"")
-        channel = w.register_channel("/pad", "cdr", schema)
-        w.add_message(channel, log_time=1, publish_time=1, data=b"\x00\x01\x00\x00")
-        w.finish()
-
-
 def _mp4(path: Path, n_frames: int) -> None:
     import av
 
@@ -142,7 +130,7 @@ def write_robot_cases(folder: Path) -> dict[str, tuple[Path, Path | None]]:
     """Write every case of :data:`CASES` under ``folder``; name -> (recording, mapping)."""
     folder.mkdir(parents=True, exist_ok=True)
     writers = {"backward-stamps": _backward, "bad-jpeg": _bad_jpeg,
-               "type-without-definition": _no_definition, "no-frames": _no_frames,
+               "type-without-definition": write_mcap_without_definition, "no-frames": _no_frames,
                "undecodable-frame": _zeroed_frame}
     out: dict[str, tuple[Path, Path | None]] = {}
     for name, (file, stream) in CASES.items():

@@ -23,6 +23,7 @@ from tests.factories.robot_recordings import (
     rig_messages,
     typestore,
     write_mcap,
+    write_mcap_without_definition,
     write_ros1_bag,
     write_ros2_bag,
 )
@@ -259,16 +260,7 @@ def test_a_mapping_key_error_names_the_key_and_line(recordings, tmp_path):
 
 
 def test_a_message_type_without_a_definition(tmp_path):
-    from mcap.writer import Writer
-
-    path = tmp_path / "nodef.mcap"
-    with open(path, "wb") as f:
-        w = Writer(f)
-        w.start(profile="ros2")
-        schema = w.register_schema(CUSTOM_TYPE, "ros2msg", b"")
-        channel = w.register_channel("/pad", "cdr", schema)
-        w.add_message(channel, log_time=1, publish_time=1, data=b"\x00\x01\x00\x00")
-        w.finish()
+    path = write_mcap_without_definition(tmp_path / "nodef.mcap")
     mapping = tmp_path / "m.yaml"
     mapping.write_text("streams:\n  - {topic: /pad, name: p, kind: pressure}\n")
     out = tmp_path / "o.h5"
