@@ -21,6 +21,7 @@ with a small network trained on the factory's presses (seed 0; timed frames seed
 on that size, so it is left out there).
 
     .venv/bin/python benchmarks/heightmap.py [--scene trials.h5 --truth DIR --model RUN]
+        [--models RUN ...] [--strides 1 2 3] [--camera RUN STRIDE] [--before TREE]
         [--frames 30] [--json]
 
 JSON keys: tactile_ms_per_frame, baseline_ms_per_frame, ratio, height_rmse_mm (320x240),
@@ -28,6 +29,15 @@ replay_fps (issue 35, item 6: a whole replay of the timed 320x240 frames as one 
 trial through ``monitor_file`` with the height source: frame read, height map, slip
 signal on the 32x24 mesh, monitor; ``replay`` beside it holds the frame read alone),
 plus per-size details and the load average before and after.
+
+Camera rate (issue 35, item 6): ``camera_rate`` holds, for ``--model`` and each of
+``--models`` at each of ``--strides`` (``HeightMapper(stride=k)``: the network on k x k
+block means, the solve on the blocks, heights interpolated back), the median ms per
+frame over ``--rounds`` interleaved rounds and the height RMSE over all pixels and the
+contact pixels, with ``rmse_vs_today`` against ``--model`` at stride 1; ``before`` (with
+``--before TREE``, an earlier checkout) the same frames through that tree's HeightMapper
+in a separate process, and ``speedup_vs_before``; ``camera_replay_fps`` (with ``--camera
+RUN STRIDE``) the whole replay at that setting.
 """
 
 from __future__ import annotations
@@ -206,16 +216,17 @@ def skip_study(model, frames, refs, truths, ppm: float, levels: list[float]) -> 
 
 
 def replay_study(work: Path, run: Path, frames: list[np.ndarray], ref: np.ndarray,
-                 ppm: float) -> dict:
+                 ppm: float, stride: int = 1) -> dict:
     """A whole replay of ``frames`` as one 60 fps trial of a tactile file: the frame read
-    alone, and ``monitor_file`` with the height source (read, height map, slip signal on
-    the 32x24 mesh, monitor), frames per second of each."""
+    alone, and ``monitor_file`` with the height source (read, height map at ``stride``,
+    slip signal on the 32x24 mesh, monitor), frames per second of each."""
     from tactile_cli.store import StoreWriter
     from tactile_cli.store.trials import TactileFile
     from tactile_cli.visuotactile.monitor_replay import monitor_file
 
     path = work / "replay.h5"
     h, w = frames[0].shape[:2]
+    path.unlink(missing_ok=True)
     with StoreWriter(path, command="benchmarks/heightmap.py") as wr:
         s = wr.add_sensor("digit", kind="visuotactile", sample_rate_hz=60.0, width_px=w,
                           height_px=h, px_per_mm=ppm)
@@ -228,12 +239,103 @@ def replay_study(work: Path, run: Path, frames: list[np.ndarray], ref: np.ndarra
         fr = tf.trial("replay").frames()
         read = sum(int(img[0, 0, 0]) for _, img in fr)  # every frame decoded
     read_s = time.perf_counter() - t0
-    monitor_file(path, source="height", model_run=run, n_static=5)  # warm-up
+    monitor_file(path, source="height", model_run=run, n_static=5, stride=stride)  # warm-up
     t0 = time.perf_counter()
-    monitor_file(path, source="height", model_run=run, n_static=5)
+    monitor_file(path, source="height", model_run=run, n_static=5, stride=stride)
     replay_s = time.perf_counter() - t0
-    return {"frames": n, "read_fps": round(n / read_s, 1), "replay_fps": round(n / replay_s, 1),
+    return {"frames": n, "model": str(run), "stride": stride,
+            "read_fps": round(n / read_s, 1), "replay_fps": round(n / replay_s, 1),
             "replay_ms_per_frame": round(1e3 * replay_s / n, 2), "checksum": read}
+
+
+def _rounds(mappers: dict, items: list, rounds: int) -> dict:
+    """Median ms per frame of each mapper over ``rounds`` rounds, the mappers interleaved
+    within a round (so a slow moment of the machine falls on all of them)."""
+    times: dict = {key: [] for key in mappers}
+    for _ in range(rounds):
+        for key, mapper in mappers.items():
+            mapper(*items[0])  # warm-up (buffers, FFT plans)
+            t0 = time.perf_counter()
+            for x in items:
+                mapper(*x)
+            times[key].append(1e3 * (time.perf_counter() - t0) / len(items))
+    return {key: float(np.median(v)) for key, v in times.items()}
+
+
+def camera_rate_study(runs: list[Path], frames, refs, truths, ppm: float,  # type: ignore[no-untyped-def]
+                      strides: list[int], rounds: int) -> list[dict]:
+    """Issue 35, item 6: ms per frame (median of interleaved rounds) and height RMSE (all
+    pixels and the truth's contact pixels, height > 0) of every model run at every
+    stride, on the same frames; ``rmse_vs_today`` relative to the first run at stride 1
+    (the paper's network at every pixel)."""
+    from tactile_cli.visuotactile.heightmap import HeightMapper
+    from tactile_cli.visuotactile.normals import NormalModel
+
+    items = list(zip(frames, refs, strict=True))
+    mappers = {}
+    for run in runs:
+        model = NormalModel.from_run(run)
+        for k in strides:
+            mappers[(str(run), k)] = HeightMapper(model, ppm, stride=k)
+    ms = _rounds(mappers, items, rounds)
+    rows = []
+    for (run, k), mapper in mappers.items():
+        sq = sq_c = 0.0
+        n = n_c = 0
+        for (frame, ref), true in zip(items, truths, strict=True):
+            err = (mapper(frame, ref).astype(np.float64) - true) ** 2
+            contact = true > 0
+            sq, n = sq + float(err.sum()), n + err.size
+            sq_c, n_c = sq_c + float(err[contact].sum()), n_c + int(contact.sum())
+        hidden = [int(w.shape[1]) for w, _ in mapper.model.hidden]
+        rows.append({"model": run, "hidden": [int(mapper.model.b1.size), *hidden],
+                     "stride": k, "ms_per_frame": round(ms[(run, k)], 2),
+                     "height_rmse_mm": float(np.sqrt(sq / n)),
+                     "height_rmse_contact_mm": float(np.sqrt(sq_c / n_c)) if n_c else None})
+    today = rows[0]
+    for r in rows:
+        r["rmse_vs_today"] = round(r["height_rmse_mm"] / today["height_rmse_mm"] - 1, 4)
+        if today["height_rmse_contact_mm"] and r["height_rmse_contact_mm"]:
+            r["contact_rmse_vs_today"] = round(
+                r["height_rmse_contact_mm"] / today["height_rmse_contact_mm"] - 1, 4)
+    return rows
+
+
+_BEFORE = """
+import json, sys, time
+import numpy as np
+from tactile_cli.visuotactile.heightmap import HeightMapper
+from tactile_cli.visuotactile.normals import NormalModel
+z = np.load(sys.argv[1])
+items = list(zip(z["frames"], z["refs"]))
+mapper = HeightMapper(NormalModel.from_run(sys.argv[2]), float(z["ppm"]))
+times = []
+for _ in range(int(sys.argv[3])):
+    mapper(*items[0])
+    t0 = time.perf_counter()
+    for x in items:
+        mapper(*x)
+    times.append(1e3 * (time.perf_counter() - t0) / len(items))
+print(json.dumps({"ms_per_frame": float(np.median(times))}))
+"""
+
+
+def before_study(tree: Path, work: Path, run: Path, frames, refs, ppm: float,  # type: ignore[no-untyped-def]
+                 rounds: int) -> dict:
+    """The same frames through ``HeightMapper`` of an earlier checkout ``tree`` (the
+    implementation before this one), in a separate process: median ms per frame."""
+    import subprocess
+
+    data = work / "before_frames.npz"
+    np.savez(data, frames=np.stack(frames), refs=np.stack(refs), ppm=ppm)
+    env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
+    out = subprocess.run([sys.executable, "-c", _BEFORE, str(data), str(run.resolve()),
+                          str(rounds)], env=env, capture_output=True, text=True, cwd=tree)
+    if out.returncode != 0:
+        raise SystemExit(f"--before {tree}: {out.stderr.strip().splitlines()[-1]}")
+    commit = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True).stdout.strip() or None
+    return {"tree": str(tree), "commit": commit, **json.loads(out.stdout.splitlines()[-1])}
 
 
 def main() -> None:
@@ -243,6 +345,17 @@ def main() -> None:
     ap.add_argument("--model", type=Path, help="normal-network run folder")
     ap.add_argument("--frames", type=int, default=30)
     ap.add_argument("--skip-levels", type=float, nargs="*", default=[2.0, 4.0, 8.0])
+    ap.add_argument("--models", type=Path, nargs="*", default=[],
+                    help="further normal-network runs for the camera-rate study (issue 35, "
+                         "item 6), e.g. configs/train_mlp_normals_small.yaml's")
+    ap.add_argument("--strides", type=int, nargs="*", default=[1, 2, 3],
+                    help="block sides of the camera-rate study (HeightMapper stride)")
+    ap.add_argument("--camera", nargs=2, metavar=("RUN", "STRIDE"),
+                    help="the setting whose whole replay is also timed (camera_replay_fps)")
+    ap.add_argument("--rounds", type=int, default=5, help="interleaved timing rounds")
+    ap.add_argument("--before", type=Path, metavar="TREE",
+                    help="an earlier checkout of this repository: its HeightMapper on the "
+                         "same frames and --model, timed in a separate process")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
@@ -266,7 +379,14 @@ def main() -> None:
         model = NormalModel.from_run(run)
         small = measure(model, frames, refs, truths, ppm, rmse=True)
         skips = skip_study(model, frames, refs, truths, ppm, args.skip_levels)
+        camera = camera_rate_study([run, *args.models], frames, refs, truths, ppm,
+                                   args.strides, args.rounds)
+        before = (None if args.before is None else
+                  before_study(args.before, work, run, frames, refs, ppm, args.rounds))
         replay = replay_study(work, run, frames, refs[0], ppm)
+        camera_replay = (None if args.camera is None else
+                         replay_study(work, Path(args.camera[0]), frames, refs[0], ppm,
+                                      stride=int(args.camera[1])))
         big_frames, big_ref, big_truth = factory_frames((480, 640), min(args.frames, 10), 2, ppm)
         big = measure(model, big_frames, [big_ref] * len(big_frames), big_truth, ppm,
                       rmse=False)
@@ -281,7 +401,13 @@ def main() -> None:
         "load_before": load_before, "load_after": load_after, "cpus": os.cpu_count(),
         "target_ms_per_frame": 5.0, "target_ratio": 10.0,
         "replay_fps": replay["replay_fps"], "replay": replay, "target_replay_fps": 60.0,
+        "camera_rate": camera, "before": before,
+        "camera_replay_fps": None if camera_replay is None else camera_replay["replay_fps"],
+        "camera_replay": camera_replay,
     }
+    here = next(r for r in camera if r["model"] == str(run) and r["stride"] == 1)
+    if before is not None:
+        out["speedup_vs_before"] = round(before["ms_per_frame"] / here["ms_per_frame"], 2)
     if args.json:
         print(json.dumps(out, indent=2))
         return
@@ -300,6 +426,21 @@ def main() -> None:
     for s in skips:
         print(f"  skip_below {s['skip_below']:g}: {s['ms_per_frame']:.2f} ms/frame, RMSE "
               f"{s['height_rmse_mm']:.4f} mm")
+    print(f"camera rate (median of {args.rounds} interleaved rounds; RMSE against the first "
+          "model at stride 1):")
+    for r in camera:
+        contact = r.get("contact_rmse_vs_today")
+        print(f"  {'-'.join(map(str, [5, *r['hidden'], 3]))} stride {r['stride']}: "
+              f"{r['ms_per_frame']:.2f} ms/frame, RMSE {r['height_rmse_mm']:.4f} mm "
+              f"({100 * r['rmse_vs_today']:+.1f} %), contact "
+              f"{r['height_rmse_contact_mm']:.4f} mm"
+              + ("" if contact is None else f" ({100 * contact:+.1f} %)"))
+    if before is not None:
+        print(f"before ({before['commit']}): {before['ms_per_frame']:.2f} ms/frame; now "
+              f"{here['ms_per_frame']:.2f} ({out['speedup_vs_before']:.2f}x)")
+    if camera_replay is not None:
+        print(f"replay at {args.camera[0]} stride {args.camera[1]}: "
+              f"{camera_replay['replay_fps']:.1f} fps")
     print(f"load average before {load_before}, after {load_after}; {os.cpu_count()} CPUs")
 
 

@@ -15,7 +15,8 @@ from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {
     "run_dir": "--model", "out": "--out", "truth_dir": "--truth", "px_per_mm": "--px-per-mm",
-    "skip_below": "--skip-below", "workers": "--workers", "trials": "--trial", "plot": "--plot",
+    "skip_below": "--skip-below", "stride": "--stride", "workers": "--workers",
+    "trials": "--trial", "plot": "--plot",
     "overwrite": "--overwrite",
 }
 
@@ -41,6 +42,12 @@ def heightmap_command(
         "--skip-below", help="Take pixels whose colour differs from the reference by less "
         "than this (0-255, every channel) as flat without running the network (faster; see "
         "benchmarks/heightmap.py for its RMSE cost). Default: off.", show_default=False)] = None,
+    stride: Annotated[int, typer.Option(
+        "--stride", min=1, help="One network prediction per STRIDE x STRIDE pixel block "
+        "(from the block's mean colour) and a Poisson solve on the blocks, the heights "
+        "interpolated back to every pixel: about STRIDE^2 less work (camera rate), its "
+        "height RMSE cost in benchmarks/RESULTS.md. Default: every pixel.",
+        metavar="STRIDE")] = 1,
     workers: Annotated[int | None, typer.Option(
         "--workers", min=1, help="Threads (default: the usable CPUs, at most 8).",
         show_default=False)] = None,
@@ -63,7 +70,8 @@ def heightmap_command(
     def body():
         with RichProgress(enabled=progress) as bar:
             return heightmap_file(file, model, out, truth_dir=truth, px_per_mm=px_per_mm,
-                                  skip_below=skip_below, workers=workers, trials=trial,
+                                  skip_below=skip_below, stride=stride, workers=workers,
+                                  trials=trial,
                                   overwrite=overwrite, progress=bar, plot=plot)
 
     print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

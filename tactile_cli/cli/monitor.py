@@ -14,7 +14,8 @@ from ._output import print_result
 from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {
-    "source": "--source", "model_run": "--model", "mesh": "--mesh", "hold_s": "--hold-s",
+    "source": "--source", "model_run": "--model", "stride": "--stride", "mesh": "--mesh",
+    "hold_s": "--hold-s",
     "motion_s": "--motion-s", "threshold": "--threshold", "n_static": "--n-static",
     "trials": "--trial", "plot": "--plot",
 }
@@ -42,6 +43,11 @@ def monitor_command(
     model: Annotated[Path | None, typer.Option(
         "--model", help="Run folder of a trained normal network (tactile train "
         "configs/train_mlp_normals.yaml), for --source height.", metavar="RUN")] = None,
+    stride: Annotated[int, typer.Option(
+        "--stride", min=1, help="For --source height: height maps from one network "
+        "prediction per STRIDE x STRIDE pixel block (block-mean colour) and a Poisson solve "
+        "on the blocks, interpolated back to every pixel; about STRIDE^2 less work, its "
+        "height RMSE cost in benchmarks/RESULTS.md.", metavar="STRIDE")] = 1,
     mesh: Annotated[str, typer.Option("--mesh", help="Tactile mesh COLSxROWS (paper: 32x24).",
                                       metavar="COLSxROWS")] = "32x24",
     hold_s: Annotated[float, typer.Option("--hold-s", help="Seconds without a slip before the "
@@ -81,6 +87,6 @@ def monitor_command(
                                  overwrite=overwrite, source=source, model_run=model,
                                  mesh=mesh, hold_s=hold_s, motion_s=motion_s,
                                  threshold=threshold, n_static=n_static, trials=trial,
-                                 progress=bar)
+                                 stride=stride, progress=bar)
 
     print_result(run_guarded(body, flags=FLAGS), as_json=as_json)

@@ -17,7 +17,7 @@ from .progress import ProgressOption, RichProgress
 FLAGS: dict[str, Flag] = {
     "source": "--source", "run_dir": "--model", "mesh": "--mesh", "scale": "--scale",
     "n_static": "--n-static", "trials": "--trial", "px_per_mm": "--px-per-mm",
-    "workers": "--workers", "plot": "--plot",
+    "workers": "--workers", "stride": "--stride", "plot": "--plot",
 }
 
 
@@ -53,6 +53,10 @@ def slip_signal_command(
     workers: Annotated[int | None, typer.Option(
         "--workers", min=1, help="Threads for --model (default: the usable CPUs).",
         show_default=False)] = None,
+    stride: Annotated[int, typer.Option(
+        "--stride", min=1, help="For --model: height maps from one network prediction per "
+        "STRIDE x STRIDE pixel block, interpolated back to every pixel (as tactile heightmap "
+        "--stride).", metavar="STRIDE")] = 1,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Folder for one PNG per trial and source: S over time with the "
         "threshold, onset and detection.", metavar="FOLDER", show_default=False)] = None,
@@ -73,8 +77,8 @@ def slip_signal_command(
         with RichProgress(enabled=progress) as bar:
             return slip_signal_file(file, source=source, run_dir=model, mesh=parse_mesh(mesh),
                                     scale=parse_scale(scale), n_static=n_static, trials=trial,
-                                    px_per_mm=px_per_mm, workers=workers, progress=bar,
-                                    plot=plot)
+                                    px_per_mm=px_per_mm, workers=workers, stride=stride,
+                                    progress=bar, plot=plot)
 
     print_result(run_guarded(body, flags=FLAGS), as_json=as_json,
                  width=None if sys.stdout.isatty() else 160)

@@ -18,6 +18,13 @@ Skipping flat pixels (``skip_below``): pixels whose colour differs from the refe
 less than ``skip_below`` (0-255 units, every channel) are taken as flat (normal
 (0, 0, 1)) without running the network. Off by default; its cost in height RMSE is
 measured next to its speed by ``benchmarks/heightmap.py``.
+
+Blocks (``stride`` k > 1, for camera rate): one network prediction per k x k block of
+pixels, from the block's mean colour difference at the block's centre; eq. 9 and the
+Poisson solve on the block grid (k / px_per_mm mm per block); the heights interpolated
+bilinearly back to every pixel (:meth:`HeightMapper._to_pixels`). About k^2 less work
+for the network and the solve; heights lose detail finer than a block. Its speed and
+height RMSE beside every-pixel maps: ``benchmarks/heightmap.py``.
 """
 
 from __future__ import annotations
@@ -63,25 +70,35 @@ def check_px_per_mm(value: object, *, what: str | None = None,
 class HeightMapper:
     """Frame -> height map. model: a :class:`NormalModel`; px_per_mm: the gel's scale;
     workers: threads (network tiles and FFTs); skip_below: see the module docstring
-    (None: off); nz_floor: eq. 9's floor on nz."""
+    (None: off); nz_floor: eq. 9's floor on nz; stride: see the module docstring (1:
+    every pixel)."""
 
     model: NormalModel
     px_per_mm: float
     workers: int = field(default_factory=default_workers)
     skip_below: float | None = None
     nz_floor: float = NZ_FLOOR
+    stride: int = 1
     _solvers: dict[tuple[int, int], PoissonSolver] = field(default_factory=dict, repr=False)
+    _upsample: dict[tuple[int, int], tuple[np.ndarray, ...]] = field(default_factory=dict,
+                                                                    repr=False)
 
     def __post_init__(self) -> None:
         check_px_per_mm(self.px_per_mm)
         if self.skip_below is not None and not (np.isfinite(self.skip_below)
                                                 and self.skip_below >= 0):
             raise InputError(f"`skip_below` (={self.skip_below}) must be >= 0 colour units")
+        self.stride = check_stride(self.stride)
+        if self.stride > 1 and self.skip_below is not None:
+            raise InputError("`skip_below` and `stride` > 1 cannot be combined: choose one "
+                             "way of skipping work")
 
     def solver(self, height: int, width: int) -> PoissonSolver:
+        """The Poisson solver of a (height, width) gradient grid (at the mapper's stride:
+        its pixels are ``stride`` frame pixels wide)."""
         key = (height, width)
         if key not in self._solvers:
-            self._solvers[key] = PoissonSolver(height, width, self.px_per_mm,
+            self._solvers[key] = PoissonSolver(height, width, self.px_per_mm / self.stride,
                                                workers=self.workers, dtype=np.float32)
         return self._solvers[key]
 
@@ -95,9 +112,48 @@ class HeightMapper:
 
     def __call__(self, frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """(H, W, 3) uint8 frame and reference -> (H, W) float32 heights in mm."""
-        n = self.normals(frame, reference)
-        gx, gy = gradients_from_normals(n, nz_floor=self.nz_floor)
-        return self.solver(*n.shape[:2]).integrate(gx, gy)
+        if self.skip_below is None:  # gradients straight from the network, no normals kept
+            gx, gy = self.model.gradients(frame, reference, nz_floor=self.nz_floor,
+                                          workers=self.workers, stride=self.stride)
+        else:
+            gx, gy = gradients_from_normals(self.normals(frame, reference),
+                                            nz_floor=self.nz_floor)
+        heights = self.solver(*gx.shape).integrate(gx, gy)
+        if self.stride == 1:
+            return heights
+        return self._to_pixels(heights, frame.shape[:2])
+
+    def _to_pixels(self, coarse: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+        """(h, w) heights of the stride's blocks -> (H, W) heights of the frame's pixels:
+        bilinear between block centres (pixel centre i sits at block coordinate
+        (i + 0.5) / k - 0.5), the edge blocks' values held beyond their centres."""
+        key = (int(shape[0]), int(shape[1]))
+        if key not in self._upsample:
+            axes = []
+            for n_px, n_blocks in zip(key, coarse.shape, strict=True):
+                at = np.clip((np.arange(n_px) + 0.5) / self.stride - 0.5, 0, n_blocks - 1)
+                i0 = np.floor(at).astype(np.intp)
+                i1 = np.minimum(i0 + 1, n_blocks - 1)
+                wt = (at - i0).astype(np.float32)
+                axes += [i0, i1, wt]
+            self._upsample = {key: tuple(axes)}
+        r0, r1, rw, c0, c1, cw = self._upsample[key]
+        rows = coarse[r0] * (1 - rw)[:, None] + coarse[r1] * rw[:, None]
+        return (rows[:, c0] * (1 - cw) + rows[:, c1] * cw).astype(np.float32, copy=False)
+
+
+#: the largest block side of ``stride``: a 16 x 16 block is 1.7 mm at a DIGIT's 9.4 px/mm
+MAX_STRIDE = 16
+
+
+def check_stride(value: object) -> int:
+    """``value`` as a block side from 1 to :data:`MAX_STRIDE`; one InputError otherwise."""
+    ok = (isinstance(value, int | np.integer) and not isinstance(value, bool)
+          and 1 <= value <= MAX_STRIDE)
+    if not ok:
+        raise InputError(f"`stride` (={value!r}) must be a whole number of pixels from 1 to "
+                         f"{MAX_STRIDE}")
+    return int(value)  # type: ignore[arg-type]
 
 
 def frames_px_per_mm(tf: TactileFile, trial: Trial, px_per_mm: float | None) -> float:
@@ -269,7 +325,8 @@ def _figures(tf: TactileFile, folder: Path, peaks: dict[str, tuple[int, np.ndarr
 
 def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
                    truth_dir: str | Path | None = None, px_per_mm: float | None = None,
-                   skip_below: float | None = None, workers: int | None = None,
+                   skip_below: float | None = None, stride: int = 1,
+                   workers: int | None = None,
                    trials: Sequence[str] | None = None, overwrite: bool = False,
                    command: str | None = None, progress: Progress | None = None,
                    plot: str | Path | None = None,
@@ -294,7 +351,12 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
     with limit_threads(threads):
         model = NormalModel.from_run(run_dir)
     run_path = Path(run_dir)
+    stride = check_stride(stride)
+    if stride > 1 and skip_below is not None:
+        raise InputError("`skip_below` and `stride` > 1 cannot be combined: choose one way "
+                         "of skipping work")
     config = {"run": str(run_dir), "px_per_mm": px_per_mm, "skip_below": skip_below,
+              "stride": stride,
               "truth": None if truth_dir is None else str(truth_dir),
               "nz_floor": NZ_FLOOR, "input_kind": model.input_kind,
               "sensor_unit": None if model.calibration is None
@@ -311,7 +373,8 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
             chosen = tf.trials(list(trials))
         scale = frames_px_per_mm(tf, chosen[0], px_per_mm)
         warnings = model.check_frames(tf, chosen[0], scale)
-        mapper = HeightMapper(model, scale, skip_below=skip_below, workers=threads)
+        mapper = HeightMapper(model, scale, skip_below=skip_below, stride=stride,
+                              workers=threads)
         with StoreWriter(out, command=command, config=config, overwrite=overwrite) as w:
             source = w.add_source(path)
             model_source = w.add_source(run_path / "model.pt")

@@ -165,10 +165,13 @@ def parse_mesh(text: str) -> tuple[int, int]:
 class _MapSource:
     """Per-frame maps of one source; for ``height`` the normal model, loaded once."""
 
-    def __init__(self, source: str, model_run: str | Path | None):
+    def __init__(self, source: str, model_run: str | Path | None, stride: int = 1):
+        from .heightmap import check_stride
+
         if source not in SOURCES:
             raise InputError(f"`source` (={source!r}) is not one of {', '.join(SOURCES)}")
         self.source = source
+        self.stride = check_stride(stride)
         self.model: Any = None
         if source == "height" and model_run is not None:
             from .normals import NormalModel
@@ -199,7 +202,8 @@ class _MapSource:
                                  "file) or a trained normal model: pass `model_run` (a run of "
                                  "`tactile train configs/train_mlp_normals.yaml`)",
                                  path=trial.path)
-            mapper = HeightMapper(self.model, frames_px_per_mm(tf, trial, None))
+            mapper = HeightMapper(self.model, frames_px_per_mm(tf, trial, None),
+                                  stride=self.stride)
         for a in range(0, frames.n_frames, block):
             b = min(a + block, frames.n_frames)
             raise_if_requested()
@@ -269,15 +273,17 @@ def monitor_file(path: str | Path, *, source: str = "intensity",
                  hold_s: float = DEFAULT_HOLD_S, motion_s: float = DEFAULT_MOTION_S,
                  threshold: float | None = None, n_static: int = DEFAULT_N_STATIC,
                  scale: float = DEFAULT_SCALE, match_s: float = DEFAULT_MATCH_S,
-                 trials: Sequence[str] | None = None,
+                 trials: Sequence[str] | None = None, stride: int = 1,
                  progress: Progress | None = None) -> MonitorFileResult:
     """Replay every trial with frames in tactile HDF5 file ``path`` (or the named
-    ``trials``) through the monitor; see the module docstring. InputError naming the
-    file for a file without frames, an unknown trial, or too few static frames."""
+    ``trials``) through the monitor; see the module docstring. ``stride``: the height
+    source's block side (:class:`.heightmap.HeightMapper`; 1: every pixel). InputError
+    naming the file for a file without frames, an unknown trial, or too few static
+    frames."""
     progress = progress or NullProgress()
     if min(mesh) < 1:
         raise InputError(f"`mesh` (={mesh}) must have at least one column and one row")
-    maps = _MapSource(source, model_run)
+    maps = _MapSource(source, model_run, stride)
     results: list[TrialMonitor] = []
     with TactileFile(path) as tf:
         from .heightmap import STREAM, check_frame_times

@@ -12,8 +12,8 @@ only then, inside ``learn/``) and infers with float32 numpy:
   the function);
 - every bias rides inside its matmul (a constant-1 input column and a constant-1 unit
   carried through the hidden layers), so a layer is one matmul and one ReLU;
-- the (H * W, 6) input buffer [colour, x, y, 1] is kept per frame size: only the colour
-  columns are written per frame;
+- the first layer is split into its colour part and its position part ([x, y, 1], kept
+  per frame size), two K = 3 products added, so no (n, 6) input is assembled;
 - pixels go through the layers in tiles of :data:`TILE_PX` (the activations stay in the
   L2 cache), each tile with one-threaded BLAS (threadpoolctl), the tiles shared between
   ``workers`` threads (numpy's matmul releases the GIL): a tile's rows and its BLAS
@@ -27,6 +27,8 @@ float in 0-255 units.
 from __future__ import annotations
 
 import os
+import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,8 +43,9 @@ from .sensor_unit import SensorCalibration, check_frames
 _KIND_CHANNELS = {"difference": {"x", "y", "dR", "dG", "dB"},
                   "absolute": {"x", "y", "R", "G", "B"}}
 _HEADS = ("nx", "ny", "nz")
-#: pixels per tile: 2048 x 32 float32 = 256 KiB per activation buffer, inside L2
-TILE_PX = 2048
+#: pixels per tile: 4096 x 33 float32 = 528 KiB per activation buffer (inside this
+#: Xeon's 1 MiB L2 with the weights); 2048 was 15 % slower a frame at 320x240
+TILE_PX = 4096
 
 
 def default_workers() -> int:
@@ -76,9 +79,13 @@ class NormalModel:
     run_dir: Path | None = None
     #: the unit, frame size and scale the run was calibrated on (None: not recorded)
     calibration: SensorCalibration | None = None
-    _input_cache: dict[tuple[int, int], np.ndarray] = field(default_factory=dict, repr=False)
+    _input_cache: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict, repr=False)
     _aug: tuple[np.ndarray, list[np.ndarray], np.ndarray] | None = field(default=None,
                                                                           repr=False)
+    #: per worker tile buffers, the worker threads (kept across frames), one caller a time
+    _buffers: dict[int, tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False)
+    _pool: tuple[int, ThreadPoolExecutor] | None = field(default=None, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     # -- construction ----------------------------------------------------------------------
     @classmethod
@@ -174,40 +181,69 @@ class NormalModel:
             self._aug = (first, hidden, out)
         return self._aug
 
-    def _inputs(self, height: int, width: int) -> np.ndarray:
-        """(H * W, 6) float32 buffer [colour (filled per frame), x, y, 1]; cached per size."""
-        key = (height, width)
+    def _positions(self, height: int, width: int, stride: int = 1) -> np.ndarray:
+        """(height * width, 3) float32 [x, y, 1], row-major, of a frame's pixels (stride 1)
+        or of the centres of its ``stride`` x ``stride`` blocks (x = stride * j + (stride -
+        1) / 2 in frame pixels); cached per size."""
+        key = (height, width, stride)
         if key not in self._input_cache:
             yy, xx = np.mgrid[0:height, 0:width]
-            buf = np.zeros((height * width, 6), dtype=np.float32)
-            buf[:, 3], buf[:, 4], buf[:, 5] = xx.ravel(), yy.ravel(), 1.0
-            self._input_cache = {key: buf}  # one size at a time: frames of a file share it
+            pos = np.empty((height * width, 3), dtype=np.float32)
+            centre = (stride - 1) / 2
+            pos[:, 0] = xx.ravel() * stride + centre
+            pos[:, 1] = yy.ravel() * stride + centre
+            pos[:, 2] = 1.0
+            self._input_cache = {key: pos}  # one size at a time: frames of a file share it
         return self._input_cache[key]
 
-    def _raw(self, inputs: np.ndarray, *, workers: int) -> np.ndarray:
-        """(n, 6) [colour, x, y, 1] -> (n, 3) float32 network outputs (not yet unit)."""
-        first, hidden, w_out = self._augmented()
-        n = inputs.shape[0]
-        out = np.empty((n, 3), dtype=np.float32)
-        width = first.shape[1]
-        zero = np.float32(0.0)
+    def _run(self, colour: np.ndarray, pos: np.ndarray, *, workers: int,
+             sink: Callable[[int, np.ndarray], None]) -> None:
+        """The network over n pixels in tiles. colour: (n, 3) float32 contiguous (dR, dG, dB
+        or R, G, B); pos: (n, 3) float32 contiguous [x, y, 1]; ``sink(start, raw)`` gets
+        each tile's outputs as a (3, rows) float32 array (nx, ny, nz, not yet unit), rows
+        ``start`` to ``start + rows``, and must copy what it keeps.
 
-        def tiles(starts: range) -> None:
-            a = np.empty((TILE_PX, width), dtype=np.float32)
-            b = np.empty((TILE_PX, width), dtype=np.float32)
-            keep = np.empty((TILE_PX, width), dtype=bool)
+        Layout (this is where the time goes at camera rate): every array a tile touches is
+        contiguous. The first layer is ``colour @ W_colour + [x, y, 1] @ W_position`` (two
+        K = 3 products, so no (n, 6) input is assembled column by column: numpy's strided
+        column copies cost more than the network's first layer), and the last layer writes
+        its outputs planar, (3, rows), which the sinks read as contiguous rows."""
+        first, hidden, w_out = self._augmented()
+        w_colour, w_pos = first[:3], first[3:]
+        # ReLU as x + |x| = 2 ReLU(x) (two plain float passes, no mask), the 2 taken back
+        # by halving the next layer's weights: exact in binary floating point, so the
+        # products and sums are the same bits as ReLU(x) @ W
+        hidden = [w * np.float32(0.5) for w in hidden]
+        w_out_t = np.ascontiguousarray(w_out.T * np.float32(0.5))  # (3, h + 1)
+        n = colour.shape[0]
+        # layers may differ in width (e.g. 5-32-16-3): flat buffers of the widest, each
+        # layer's activations a contiguous (rows, width) view at their start
+        widest = max(w.shape[1] for w in (first, *hidden))
+        h1 = first.shape[1]
+
+        def tiles(worker: int, starts: range) -> None:
+            a, b, mag, o = self._tile_buffers(worker, widest)
             for s in starts:
-                e = min(s + TILE_PX, n)
-                x, y, k = a[: e - s], b[: e - s], keep[: e - s]
-                np.matmul(inputs[s:e], first, out=x)
+                rows = min(s + TILE_PX, n) - s
+                cur, spare = a, b
+                x = cur[: rows * h1].reshape(rows, h1)
+                p = spare[: rows * h1].reshape(rows, h1)
+                np.matmul(colour[s:s + rows], w_colour, out=x)
+                np.matmul(pos[s:s + rows], w_pos, out=p)
+                np.add(x, p, out=x)
                 for w in hidden:
-                    np.greater(x, zero, out=k)  # ReLU as a masked product: the fastest here
-                    np.multiply(x, k, out=x)
+                    m = mag[: x.size].reshape(x.shape)
+                    np.abs(x, out=m)
+                    np.add(x, m, out=x)  # 2 ReLU(x)
+                    y = spare[: rows * w.shape[1]].reshape(rows, w.shape[1])
                     np.matmul(x, w, out=y)
-                    x, y = y, x
-                np.greater(x, zero, out=k)
-                np.multiply(x, k, out=x)
-                np.matmul(x, w_out, out=out[s:e])
+                    x, cur, spare = y, spare, cur
+                m = mag[: x.size].reshape(x.shape)
+                np.abs(x, out=m)
+                np.add(x, m, out=x)
+                raw = o[: 3 * rows].reshape(3, rows)
+                np.matmul(w_out_t, x.T, out=raw)
+                sink(s, raw)
 
         # Bit-identical for every `workers`: a GEMM's summation order depends on its rows
         # and on BLAS's own thread count (OpenBLAS splits a threaded GEMM into other
@@ -216,16 +252,67 @@ class NormalModel:
         # with one-threaded BLAS, workers=1 included; workers only share out the tiles.
         n_tiles = -(-n // TILE_PX)
         workers = max(1, min(workers, n_tiles))
-        with _blas_threads(1):
+        with self._lock, _blas_threads(1):
             if workers == 1:
-                tiles(range(0, n, TILE_PX))
-                return out
+                tiles(0, range(0, n, TILE_PX))
+                return
             # each thread takes every workers-th tile (numpy releases the GIL in matmul):
             # no nested thread pools fighting over the cores
-            with ThreadPoolExecutor(workers) as pool:
-                list(pool.map(tiles, [range(i * TILE_PX, n, workers * TILE_PX)
-                                      for i in range(workers)]))
+            if self._pool is None or self._pool[0] != workers:
+                if self._pool is not None:
+                    self._pool[1].shutdown()
+                self._pool = (workers, ThreadPoolExecutor(workers,
+                                                          thread_name_prefix="normals"))
+            list(self._pool[1].map(tiles, range(workers),
+                                   [range(i * TILE_PX, n, workers * TILE_PX)
+                                    for i in range(workers)]))
+
+    def _tile_buffers(self, worker: int, widest: int
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Worker ``worker``'s tile buffers (two activations, |x| of the ReLU, the outputs),
+        kept across frames: fresh ones are new pages every frame, and two threads
+        faulting pages in at once serialise on the kernel's memory map (measured: 2
+        workers were 1.3x one instead of 2x)."""
+        bufs = self._buffers.get(worker)
+        if bufs is None or bufs[0].size < TILE_PX * widest:
+            bufs = (np.empty(TILE_PX * widest, dtype=np.float32),
+                    np.empty(TILE_PX * widest, dtype=np.float32),
+                    np.empty(TILE_PX * widest, dtype=np.float32),
+                    np.empty(3 * TILE_PX, dtype=np.float32))
+            self._buffers[worker] = bufs
+        return bufs
+
+    def _unit_planar(self, colour: np.ndarray, pos: np.ndarray, *, workers: int
+                     ) -> np.ndarray:
+        """(n, 3) colour and positions -> (3, n) float32 unit normals, planar."""
+        out = np.empty((3, colour.shape[0]), dtype=np.float32)
+
+        def sink(s: int, raw: np.ndarray) -> None:
+            rows = raw.shape[1]
+            norm = np.sqrt(np.einsum("ij,ij->j", raw, raw))
+            bad = ~(norm > 0)  # a prediction of zero length: the flat normal
+            norm[bad] = 1.0
+            np.divide(raw, norm, out=out[:, s:s + rows])
+            if bad.any():
+                out[:, s:s + rows][:, bad] = np.array([[0.0], [0.0], [1.0]], np.float32)
+
+        self._run(colour, pos, workers=workers, sink=sink)
         return out
+
+    def _frame_colour(self, frame: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """(H, W, 3) frame and reference -> (H * W, 3) float32 network colour inputs."""
+        frame = np.asarray(frame)
+        reference = np.asarray(reference)
+        if frame.ndim != 3 or frame.shape[-1] != 3 or frame.shape != reference.shape:
+            raise ValueError(f"`frame` {frame.shape} and `reference` {reference.shape} must be "
+                             "(H, W, 3) of the same size")
+        colour = np.empty((frame.shape[0] * frame.shape[1], 3), dtype=np.float32)
+        if self.input_kind == "absolute":
+            np.copyto(colour, frame.reshape(-1, 3), casting="unsafe")
+        else:
+            np.subtract(frame.reshape(-1, 3), reference.reshape(-1, 3), out=colour,
+                        dtype=np.float32)
+        return colour
 
     def predict(self, frame: np.ndarray, reference: np.ndarray, *,
                 workers: int | None = None, active: np.ndarray | None = None) -> np.ndarray:
@@ -233,27 +320,90 @@ class NormalModel:
         normals (nx, ny, nz). ``active``: optional (H, W) bool; pixels outside it are not
         run through the network and get the flat normal (0, 0, 1). A prediction of zero
         length (never seen in practice) is returned as the flat normal too."""
+        colour = self._frame_colour(frame, reference)
+        h, w = frame.shape[:2]
+        pos = self._positions(h, w)
+        workers = default_workers() if workers is None else workers
+        if active is None:
+            return np.ascontiguousarray(
+                self._unit_planar(colour, pos, workers=workers).T).reshape(h, w, 3)
+        flat = np.asarray(active, dtype=bool).ravel()
+        out = np.zeros((h * w, 3), dtype=np.float32)
+        out[:, 2] = 1.0
+        if flat.any():
+            out[flat] = self._unit_planar(np.ascontiguousarray(colour[flat]),
+                                          np.ascontiguousarray(pos[flat]),
+                                          workers=workers).T
+        return out.reshape(h, w, 3)
+
+    def gradients(self, frame: np.ndarray, reference: np.ndarray, *, nz_floor: float,
+                  workers: int | None = None, stride: int = 1
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """(H, W, 3) uint8 frame and reference -> eq. 9's surface gradients (gx, gy), each
+        (H, W) float32 in mm per mm, straight from the network's outputs: with n the raw
+        output, ``gx = -nx / max(nz, nz_floor * |n|)`` is ``-nx' / max(nz', nz_floor)`` of
+        the unit normal n' = n / |n| (:func:`.poisson.gradients_from_normals` of
+        :meth:`predict`, equal to float32 rounding) without writing the normals out. A
+        prediction of zero length gives the flat gradient (0, 0).
+
+        ``stride`` k > 1: one prediction per k x k block of pixels, from the block's mean
+        colour at the block's centre; the gradients are then (ceil(H / k), ceil(W / k))
+        (a frame whose size is not a multiple of k is extended by repeating its last row
+        and column)."""
+        if not nz_floor > 0:
+            raise ValueError(f"`nz_floor` (={nz_floor}) must be > 0")
+        if stride == 1:
+            colour = self._frame_colour(frame, reference)
+            h, w = frame.shape[:2]
+        else:
+            colour, (h, w) = self._block_colour(frame, reference, stride)
+        n = h * w
+        gx = np.empty(n, dtype=np.float32)
+        gy = np.empty(n, dtype=np.float32)
+        floor = np.float32(nz_floor)
+        tiny = np.float32(np.finfo(np.float32).tiny)
+
+        def sink(s: int, raw: np.ndarray) -> None:
+            rows = raw.shape[1]
+            den = np.sqrt(np.einsum("ij,ij->j", raw, raw))
+            den *= floor
+            np.maximum(den, raw[2], out=den)
+            np.maximum(den, tiny, out=den)  # |n| = 0: nx = ny = 0, so the gradient is 0
+            np.negative(den, out=den)
+            np.divide(raw[0], den, out=gx[s:s + rows])
+            np.divide(raw[1], den, out=gy[s:s + rows])
+
+        self._run(colour, self._positions(h, w, stride),
+                  workers=default_workers() if workers is None else workers, sink=sink)
+        return gx.reshape(h, w), gy.reshape(h, w)
+
+    def _block_colour(self, frame: np.ndarray, reference: np.ndarray, stride: int
+                      ) -> tuple[np.ndarray, tuple[int, int]]:
+        """The network's colour input per ``stride`` x ``stride`` block: (n_blocks, 3)
+        float32 block means, and the block grid's (rows, cols)."""
+        if not (isinstance(stride, int | np.integer) and stride >= 1):
+            raise ValueError(f"`stride` (={stride!r}) must be a whole number >= 1")
         frame = np.asarray(frame)
         reference = np.asarray(reference)
         if frame.ndim != 3 or frame.shape[-1] != 3 or frame.shape != reference.shape:
             raise ValueError(f"`frame` {frame.shape} and `reference` {reference.shape} must be "
                              "(H, W, 3) of the same size")
-        h, w = frame.shape[:2]
-        inputs = self._inputs(h, w)
+        k = int(stride)
+        h, w = -(-frame.shape[0] // k), -(-frame.shape[1] // k)
         if self.input_kind == "absolute":
-            inputs[:, :3] = frame.reshape(-1, 3)
-        else:
-            np.subtract(frame.reshape(-1, 3), reference.reshape(-1, 3), out=inputs[:, :3],
-                        dtype=np.float32)
-        workers = default_workers() if workers is None else workers
-        if active is None:
-            return _unit(self._raw(inputs, workers=workers)).reshape(h, w, 3)
-        flat = np.asarray(active, dtype=bool).ravel()
-        out = np.zeros((h * w, 3), dtype=np.float32)
-        out[:, 2] = 1.0
-        if flat.any():
-            out[flat] = _unit(self._raw(inputs[flat], workers=workers))
-        return out.reshape(h, w, 3)
+            d = frame.astype(np.int32)
+        else:  # int16 holds -255..255; a block sum needs int32 once k * k > 128
+            d = np.subtract(frame, reference, dtype=np.int32 if k * k > 128 else np.int16)
+        extra = (h * k - frame.shape[0], w * k - frame.shape[1])
+        if any(extra):
+            d = np.pad(d, ((0, extra[0]), (0, extra[1]), (0, 0)), mode="edge")
+        # row pairs first (contiguous), then the k columns of a block (einsum: numpy's
+        # strided reductions over a 3-wide last axis are 20x slower)
+        rows = d.reshape(h, k, w * k * 3).sum(axis=1, dtype=np.int32)
+        blocks = np.einsum("abcd->abd", rows.reshape(h, w, k, 3))
+        colour = blocks.reshape(-1, 3).astype(np.float32)
+        colour *= np.float32(1.0 / (k * k))
+        return colour, (h, w)
 
     def predict_pixels(self, table: np.ndarray) -> np.ndarray:
         """(n, 5) float32 rows in the run's channel order -> (n, 3) float32 unit normals."""
@@ -263,9 +413,10 @@ class NormalModel:
                              f"with channels {list(self.channels)}")
         order = {name: i for i, name in enumerate(self.channels)}
         colour = (("dR", "dG", "dB") if self.input_kind == "difference" else ("R", "G", "B"))
-        inputs = np.ones((t.shape[0], 6), dtype=np.float32)
-        inputs[:, :5] = t[:, [order[k] for k in (*colour, "x", "y")]]
-        return _unit(self._raw(inputs, workers=1))
+        pos = np.ones((t.shape[0], 3), dtype=np.float32)
+        pos[:, :2] = t[:, [order["x"], order["y"]]]
+        return np.ascontiguousarray(self._unit_planar(
+            np.ascontiguousarray(t[:, [order[k] for k in colour]]), pos, workers=1).T)
 
 
 class _blas_threads:  # noqa: N801 (a context manager used like a function)
@@ -291,15 +442,6 @@ class _blas_threads:  # noqa: N801 (a context manager used like a function)
     def __exit__(self, *exc: object) -> None:
         if self._limit is not None:
             self._limit.unregister()  # type: ignore[attr-defined]
-
-
-def _unit(raw: np.ndarray) -> np.ndarray:
-    norm = np.sqrt(np.einsum("ij,ij->i", raw, raw))
-    bad = ~(norm > 0)
-    norm[bad] = 1.0
-    out = raw / norm[:, None]
-    out[bad] = (0.0, 0.0, 1.0)
-    return out.astype(np.float32, copy=False)
 
 
 __all__ = ["TILE_PX", "NormalModel", "default_workers"]

@@ -117,21 +117,27 @@ class PoissonSolver:
         t, lft = self.top, self.left
         h, w = self.height, self.width
         spacing = self.dtype(1.0 / self.px_per_mm)
+        if sampling == "centre":
+            # the face between centres j and j + 1 gets their mean and faces at the frame's
+            # edge half of the one centre inside (the pad's gradient is zero), so the
+            # divergence at cell j is the central difference 0.5 (g[j + 1] - g[j - 1]) of
+            # the zero-padded gradients: four shifted adds into one padded array
+            div = np.zeros((r, c), dtype=self.dtype)
+            half = self.dtype(0.5) * spacing
+            sx = gx * half
+            sy = gy * half
+            div[t:t + h, lft - 1:lft + w - 1] += sx  # pixel j is cell j - 1's right side
+            div[t:t + h, lft + 1:lft + w + 1] -= sx  # ... and cell j + 1's left side
+            div[t - 1:t + h - 1, lft:lft + w] += sy
+            div[t + 1:t + h + 1, lft:lft + w] -= sy
+            return div
+        if sampling != "face":
+            raise ValueError(f"`sampling` (={sampling!r}) must be 'centre' or 'face'")
         # face values fx[i, j] between pixel j and j + 1 (padded grid, zero outside)
         fx = np.zeros((r, c + 1), dtype=self.dtype)
         fy = np.zeros((r + 1, c), dtype=self.dtype)
-        if sampling == "face":
-            fx[t:t + h, lft + 1:lft + w + 1] = gx
-            fy[t + 1:t + h + 1, lft:lft + w] = gy
-        elif sampling == "centre":
-            # the face between centres j and j + 1 gets their mean; faces at the frame's
-            # edge get half of the one centre inside (the pad's gradient is zero)
-            fx[t:t + h, lft + 1:lft + w + 1] += 0.5 * gx
-            fx[t:t + h, lft:lft + w] += 0.5 * gx
-            fy[t + 1:t + h + 1, lft:lft + w] += 0.5 * gy
-            fy[t:t + h, lft:lft + w] += 0.5 * gy
-        else:
-            raise ValueError(f"`sampling` (={sampling!r}) must be 'centre' or 'face'")
+        fx[t:t + h, lft + 1:lft + w + 1] = gx
+        fy[t + 1:t + h + 1, lft:lft + w] = gy
         div = (fx[:, 1:] - fx[:, :-1]) + (fy[1:, :] - fy[:-1, :])
         div *= spacing
         return div

@@ -55,6 +55,7 @@ from .heightmap import (
     HeightMapper,
     absolute_folder,
     check_frame_times,
+    check_stride,
     frames_px_per_mm,
     read_height_maps,
     trial_heights,
@@ -566,7 +567,7 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
                      mesh: tuple[int, int] = (32, 24), scale: float | str = DEFAULT_SCALE,
                      n_static: int = DEFAULT_N_STATIC, trials: Sequence[str] | None = None,
                      px_per_mm: float | None = None, workers: int | None = None,
-                     progress: Progress | None = None,
+                     stride: int = 1, progress: Progress | None = None,
                      keep_maps: dict[tuple[str, str], np.ndarray] | None = None,
                      plot: str | os.PathLike[str] | None = None) -> SlipFileResult:
     """The slip signal (eq. 10) on ``mesh`` of every trial of ``path`` (an ingested
@@ -578,10 +579,12 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
     ``run_dir``), ``intensity`` (colour change from the reference), ``both``, or ``auto``
     (height when the file holds height maps or ``run_dir`` is given, else intensity).
     ``workers``: threads of the maps (BLAS and OpenMP included; results do not depend on
-    it). ``plot``: a folder for one PNG per trial and source (S, threshold, onset and
-    detection), same-named files replaced; checked before any work. ``scale='auto'``: the
-    scale learned per source from the labelled trials (:func:`scale_by_cv`). Every trial
-    says whether its static frames were static (:func:`check_static`)."""
+    it). ``stride``: block side of the height maps made from frames
+    (:class:`.heightmap.HeightMapper`; 1: every pixel). ``plot``: a folder for one PNG per
+    trial and source (S, threshold, onset and detection), same-named files replaced;
+    checked before any work. ``scale='auto'``: the scale learned per source from the
+    labelled trials (:func:`scale_by_cv`). Every trial says whether its static frames were
+    static (:func:`check_static`)."""
     plot = None if plot is None else absolute_folder(plot)
     threads = _check_outputs(path, run_dir, plot, workers)
     if source not in SOURCES:
@@ -594,6 +597,7 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
     fixed = DEFAULT_SCALE if auto else float(scale)  # type: ignore[arg-type]
     if n_static < 1:
         raise InputError(f"`n_static` (={n_static}) must be at least 1")
+    check_stride(stride)
     prog = progress or NullProgress()
     found: list[tuple[Trial, str, bool | None, float | None, np.ndarray, np.ndarray]] = []
     warnings: list[str] = []
@@ -615,7 +619,8 @@ def slip_signal_file(path: str | os.PathLike[str], *, source: str = "auto",
             if first is None:
                 raise InputError("no trial holds frames or height maps", path=tf.path)
             mapper = HeightMapper(NormalModel.from_run(run_dir),
-                                  frames_px_per_mm(tf, first, px_per_mm), workers=threads)
+                                  frames_px_per_mm(tf, first, px_per_mm), workers=threads,
+                                  stride=stride)
             warnings.extend(mapper.model.check_frames(tf, first, mapper.px_per_mm))
         prog.start(len(chosen) * len(sources), "slip signals")
         for t in chosen:

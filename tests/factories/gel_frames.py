@@ -196,13 +196,15 @@ def make_frames_file(path: Path, *, n_trials: int = 4, n_frames: int = 45,
     return truth
 
 
-_RUNS: dict[tuple[str, str], Path] = {}
+_RUNS: dict[tuple[str, str, tuple[int, ...]], Path] = {}
 
 
-def normal_run(folder: Path, *, channels: str = "x, y, dR, dG, dB") -> Path:
-    """A small normal network (5-32-32-32-3, 3 epochs on :func:`make_pixel_table`) trained
-    once per process and folder by ``tactile_cli.learn.train.train``; returns the run folder."""
-    key = (str(folder), channels)
+def normal_run(folder: Path, *, channels: str = "x, y, dR, dG, dB",
+               hidden: tuple[int, ...] = (32, 32, 32)) -> Path:
+    """A small normal network (5-32-32-32-3 or the ``hidden`` widths, 3 epochs on
+    :func:`make_pixel_table`) trained once per process and folder by
+    ``tactile_cli.learn.train.train``; returns the run folder."""
+    key = (str(folder), channels, hidden)
     if key not in _RUNS:
         from tactile_cli.learn import parse_config
         from tactile_cli.learn.train import train
@@ -214,9 +216,11 @@ def normal_run(folder: Path, *, channels: str = "x, y, dR, dG, dB") -> Path:
         tag = "diff" if "dR" in channels else "abs"
         import yaml
 
-        config = parse_config(yaml.safe_load(TRAIN_YAML.replace("x, y, dR, dG, dB",
-                                                                channels)))
-        out = folder / f"run_{tag}"
+        text = TRAIN_YAML.replace("x, y, dR, dG, dB", channels).replace(
+            "hidden: [32, 32, 32]", f"hidden: {list(hidden)}")
+        config = parse_config(yaml.safe_load(text))
+        out = folder / f"run_{tag}" if hidden == (32, 32, 32) else folder / (
+            f"run_{tag}_" + "x".join(map(str, hidden)))
         train(config, [table], out)
         _RUNS[key] = out
     return _RUNS[key]

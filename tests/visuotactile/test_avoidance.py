@@ -234,16 +234,19 @@ def test_help():
 
 
 @pytest.mark.slow
-def test_monitor_height_source_with_a_trained_normal_model(tmp_path_factory, tmp_path):
+@pytest.mark.parametrize("stride", [1, 2])
+def test_monitor_height_source_with_a_trained_normal_model(tmp_path_factory, tmp_path,
+                                                           stride):
     """--source height: frames through a (small) trained normal network and the Poisson
-    solve; the slip trials' slides are caught, the still trials give no false slip."""
+    solve (every pixel, or 2 x 2 blocks: --stride 2); the slip trials' slides are caught,
+    the still trials give no false slip."""
     from tests.factories.gel_frames import make_frames_file, normal_run
 
     run = normal_run(tmp_path_factory.getbasetemp() / "normal_runs")
     h5 = tmp_path / "frames.h5"
     make_frames_file(h5, n_trials=2, n_frames=60, onset_frame=40, speed_px=2.0)
     res = runner.invoke(app, ["monitor", str(h5), "--source", "height", "--model", str(run),
-                              "--mesh", "16x12", "--json"])
+                              "--mesh", "16x12", "--stride", str(stride), "--json"])
     assert res.exit_code == 0, res.output
     got = json.loads(res.output)
     assert got["source"] == "height"

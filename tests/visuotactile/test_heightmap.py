@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -87,6 +88,13 @@ def test_heights_and_slip_signal_are_the_same_bits_for_any_worker_count(
                                 ).trials[0].detection.signal for workers in (1, 2)]
     np.testing.assert_array_equal(signals[1], signals[0])
     assert np.isfinite(signals[0][1:]).all() and signals[0][1:].max() > 0
+    blocks = slip_signal_file(scene["frames"], source="height", run_dir=scene["run"],
+                              mesh=(16, 12), trials=["t_01"], stride=2
+                              ).trials[0].detection.signal
+    assert blocks.shape == signals[0].shape and np.isfinite(blocks[1:]).all()
+    assert np.corrcoef(blocks[1:], signals[0][1:])[0, 1] > 0.9
+    with pytest.raises(InputError, match="`stride`"):
+        slip_signal_file(scene["frames"], source="height", run_dir=scene["run"], stride=0)
 
 
 def test_mapper_skip_below_zero_is_exact(scene: dict[str, Path]) -> None:
@@ -170,3 +178,71 @@ def test_a_text_px_per_mm_attribute_is_one_input_error(scene: dict[str, Path],
         f["sensors/digit"].attrs["px_per_mm"] = "wide"
     with TactileFile(bad) as tf, pytest.raises(InputError, match="px_per_mm is 'wide'"):
         frames_px_per_mm(tf, tf.trial("t_00"), None)
+
+
+def test_blocks_average_the_colour_and_interpolate_the_heights(scene: dict[str, Path]) -> None:
+    """Issue 35, item 6 (camera rate): ``stride`` k runs the network on k x k block means
+    at the blocks' centres, solves on the block grid and interpolates back to every pixel;
+    a size that is not a multiple of k is extended by its last row and column."""
+    model = NormalModel.from_run(scene["run"])
+    rng = np.random.default_rng(4)
+    frame = rng.integers(0, 256, (7, 10, 3), dtype=np.uint8)
+    ref = rng.integers(0, 256, (7, 10, 3), dtype=np.uint8)
+    colour, grid = model._block_colour(frame, ref, 3)
+    assert grid == (3, 4)
+    d = np.pad(frame.astype(np.float64) - ref, ((0, 2), (0, 2), (0, 0)), mode="edge")
+    want = d.reshape(3, 3, 4, 3, 3).mean(axis=(1, 3)).reshape(-1, 3)
+    np.testing.assert_allclose(colour, want, atol=1e-5)
+    pos = model._positions(3, 4, 3)
+    np.testing.assert_array_equal(pos[:5], [[1, 1, 1], [4, 1, 1], [7, 1, 1], [10, 1, 1],
+                                            [1, 4, 1]])
+    # back to pixels: bilinear between block centres, exact on a plane, held at the edges
+    mapper = HeightMapper(model, 20.0, stride=2)
+    yy, xx = np.mgrid[0:5, 0:6].astype(np.float32)
+    plane = 0.5 * yy + 2.0 * xx  # heights at the block centres (2 r + 0.5, 2 c + 0.5)
+    fine = mapper._to_pixels(plane, (10, 12))
+    py, px = np.mgrid[0:10, 0:12]
+    cy = np.clip((py + 0.5) / 2 - 0.5, 0, 4)
+    cx = np.clip((px + 0.5) / 2 - 0.5, 0, 5)
+    np.testing.assert_allclose(fine, 0.5 * cy + 2.0 * cx, atol=1e-5)
+    assert fine.dtype == np.float32
+
+
+def test_block_heights_follow_every_pixel_heights(scene: dict[str, Path]) -> None:
+    """On the factory's ball presses, heights from 2 x 2 blocks stay close to those of
+    every pixel (the press is many blocks wide), and the solve runs on the block grid."""
+    model = NormalModel.from_run(scene["run"])
+    with TactileFile(scene["frames"]) as tf:
+        fr = tf.trial("t_00").frames()
+        frames, ref = [fr[k] for k in (10, 20, 30)], fr.reference
+    full = HeightMapper(model, 20.0)
+    blocks = HeightMapper(model, 20.0, stride=2)
+    for frame in frames:
+        a, b = full(frame, ref), blocks(frame, ref)
+        assert b.shape == a.shape == frame.shape[:2]
+        assert np.sqrt(np.mean((a - b) ** 2)) < 0.1 * np.abs(a).max()
+        assert abs(float(b.max()) - float(a.max())) < 0.15 * float(a.max())
+    assert set(blocks._solvers) == {(-(-frame.shape[0] // 2), -(-frame.shape[1] // 2))}
+    with pytest.raises(InputError, match="`stride`"):
+        HeightMapper(model, 20.0, stride=0)
+    with pytest.raises(InputError, match="cannot be combined"):
+        HeightMapper(model, 20.0, stride=2, skip_below=2.0)
+
+
+def test_cli_stride_is_recorded_and_checked(scene: dict[str, Path], tmp_path: Path) -> None:
+    out = tmp_path / "h2.h5"
+    res = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model", str(scene["run"]),
+                              "--out", str(out), "--trial", "t_01", "--stride", "2",
+                              "--no-progress"])
+    assert res.exit_code == 0, res.output
+    with h5py.File(out, "r") as f:
+        assert json.loads(f.attrs["config_json"])["stride"] == 2
+    with TactileFile(out) as tf:
+        maps, _, _ = read_height_maps(tf.trial("t_01"))
+    assert maps.shape[1:] == (48, 64)
+    bad = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model", str(scene["run"]),
+                              "--out", str(tmp_path / "h3.h5"), "--stride", "2",
+                              "--skip-below", "2"])
+    assert bad.exit_code == 2
+    assert "--skip-below and --stride > 1 cannot be combined" in bad.output
+    assert not (tmp_path / "h3.h5").exists()

@@ -80,10 +80,10 @@ def test_normals_are_the_same_bits_for_any_worker_count(runs: dict[str, Path]) -
 
     model = NormalModel.from_run(runs["difference"])
     rng = np.random.default_rng(5)
-    shape = (96, 80)  # 7,680 px: three full tiles and a part tile
+    shape = (160, 80)  # 12,800 px: three full tiles and a part tile
     assert 3 * TILE_PX < shape[0] * shape[1] < 4 * TILE_PX
     ref = shade(np.zeros(shape), noise_std=1.0, rng=rng)
-    frame = shade(sphere_cap(shape, (40.0, 50.0), 2.5, 0.6), noise_std=1.0, rng=rng)
+    frame = shade(sphere_cap(shape, (40.0, 80.0), 2.5, 0.6), noise_std=1.0, rng=rng)
     active = np.abs(frame.astype(np.int16) - ref).max(axis=-1) >= 2
     assert TILE_PX < active.sum() < shape[0] * shape[1]
     with threadpool_limits(limits=2, user_api="blas"):  # the caller's BLAS has threads
@@ -94,8 +94,41 @@ def test_normals_are_the_same_bits_for_any_worker_count(runs: dict[str, Path]) -
         np.testing.assert_array_equal(model.predict(frame, ref, workers=workers,
                                                     active=active), part)
     np.testing.assert_array_equal(model.predict_pixels(np.c_[
-        np.mgrid[0:96, 0:80][::-1].reshape(2, -1).T,
+        np.mgrid[0:160, 0:80][::-1].reshape(2, -1).T,
         (frame.astype(np.float32) - ref).reshape(-1, 3)]), one.reshape(-1, 3))
+
+
+def test_layers_of_different_widths_and_gradients_straight_from_the_network(
+        runs: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> None:
+    """A 5-32-16-3 run (layers of different widths; it raised a shape error before) equals
+    its torch model, and eq. 9's gradients computed from the raw outputs equal those of
+    the unit normals, for any worker count bit for bit."""
+    from tactile_cli.visuotactile.poisson import gradients_from_normals
+
+    run = normal_run(tmp_path_factory.getbasetemp() / "normal_runs", hidden=(32, 16))
+    model = NormalModel.from_run(run)
+    assert [w.shape for w, _ in model.hidden] == [(32, 16)]
+    rng = np.random.default_rng(7)
+    shape = (72, 96)
+    ref = shade(np.zeros(shape), noise_std=1.0, rng=rng)
+    frame = shade(sphere_cap(shape, (50.0, 30.0), 2.5, 0.6), noise_std=1.0, rng=rng)
+    one = model.predict(frame, ref, workers=1)
+    yy, xx = np.mgrid[0:72, 0:96]
+    table = np.c_[xx.ravel(), yy.ravel(),
+                  (frame.astype(np.float32) - ref).reshape(-1, 3)].astype(np.float32)
+    np.testing.assert_allclose(one.reshape(-1, 3), _torch_normals(run, table), atol=1e-5)
+    for m in (model, NormalModel.from_run(runs["difference"])):
+        for floor in (0.1, 0.9):  # 0.9: the floor binds on most of the cap
+            want = gradients_from_normals(m.predict(frame, ref, workers=1), nz_floor=floor)
+            got = m.gradients(frame, ref, nz_floor=floor, workers=1)
+            for g, w in zip(got, want, strict=True):
+                assert g.shape == shape and g.dtype == np.float32
+                np.testing.assert_allclose(g, w, rtol=1e-5, atol=1e-6)
+            for g, g2 in zip(got, m.gradients(frame, ref, nz_floor=floor, workers=2),
+                             strict=True):
+                np.testing.assert_array_equal(g, g2)
+    with pytest.raises(ValueError, match="nz_floor"):
+        model.gradients(frame, ref, nz_floor=0.0)
 
 
 def test_a_flat_frame_is_nearly_flat(runs: dict[str, Path]) -> None:

@@ -131,3 +131,22 @@ def test_bad_arguments() -> None:
         s.integrate(np.zeros((12, 10)), np.zeros((12, 10)))
     with pytest.raises(ValueError, match="sampling"):
         s.integrate(np.zeros((10, 12)), np.zeros((10, 12)), sampling="edge")  # type: ignore[arg-type]
+
+
+def test_the_centre_divergence_is_the_mean_face_difference():
+    """The centre sampling's divergence, built as four shifted adds, equals its definition:
+    faces between neighbouring centres get their mean, faces at the frame's edge half of
+    the one centre inside, and the divergence is the difference of the faces."""
+    rng = np.random.default_rng(3)
+    h, w = 9, 13
+    s = PoissonSolver(h, w, 4.0, pad_px=1)
+    gx, gy = rng.normal(size=(h, w)), rng.normal(size=(h, w))
+    r, c, t, lft = s.rows, s.cols, s.top, s.left
+    fx = np.zeros((r, c + 1))
+    fy = np.zeros((r + 1, c))
+    fx[t:t + h, lft + 1:lft + w + 1] += 0.5 * gx
+    fx[t:t + h, lft:lft + w] += 0.5 * gx
+    fy[t + 1:t + h + 1, lft:lft + w] += 0.5 * gy
+    fy[t:t + h, lft:lft + w] += 0.5 * gy
+    want = ((fx[:, 1:] - fx[:, :-1]) + (fy[1:, :] - fy[:-1, :])) / 4.0
+    np.testing.assert_allclose(s.divergence(gx, gy), want, rtol=0, atol=1e-15)
