@@ -349,6 +349,8 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
 
 
 def _stamp(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping) -> int:
+    if st.use_header is False:  # decided on the first message: the log time
+        return log_ns
     header = header_stamp_ns(msg)
     if st.use_header is None:
         wanted = (st.spec.time or mapping.time) == "header"
@@ -376,9 +378,10 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
                                  | set(st.events)) if j < k - 1]:
             _flush(st, done, trials, rec, writer, options)
     spec = st.spec
-    if spec.is_frames:
+    kind = spec.kind
+    if kind == "visuotactile":  # spec.is_frames, without a property call per message
         _take_frame(st, msg, t_ns, k, index, rec, trials, options)
-    elif spec.is_events:
+    elif kind == "event_camera":  # spec.is_events
         _take_events(st, msg, k, rec, trials, writer)
     else:
         if st.rows is None:

@@ -204,7 +204,9 @@ def _multiarray(first: Any) -> tuple[list[str], Callable[[Any], np.ndarray]]:
         names = [f"data{i}" for i in range(n)]
 
     def read(msg: Any) -> np.ndarray:
-        return np.asarray(msg.data[offset:], dtype=np.float64)
+        # float32, what the store keeps: one conversion (a copy: a view would keep the
+        # message's whole chunk alive until the block is written)
+        return np.array(msg.data[offset:], dtype=np.float32)
 
     return names, read
 
