@@ -31,7 +31,9 @@ def compare_command(
         "smallest within it of the best.")] = 0.5,
     metric: Annotated[str, typer.Option(
         help="Score to compare: accuracy (per window), macro_f1, trial_accuracy (majority vote "
-        "per trial, for trial-level targets) or f1:<class> (e.g. f1:slip) of the primary head."
+        "per trial, for trial-level targets), group_accuracy (majority vote per group of "
+        "trials decided together, a config's data.decide_by) or f1:<class> (e.g. f1:slip) of "
+        "the primary head."
     )] = "accuracy",
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Folder for compare.png (accuracy against latency, Pareto front), "

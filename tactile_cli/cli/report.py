@@ -37,9 +37,10 @@ def report_command(
     margin: Annotated[float, typer.Option(
         min=0.0, help="Accuracy margin (percentage points) of the comparison.")] = 0.5,
     metric: Annotated[str, typer.Option(
-        help="Score of the comparison: auto (per-trial accuracy where every run votes per trial, "
-        "e.g. texture; else accuracy per window), accuracy, macro_f1, trial_accuracy or "
-        "f1:<class>.")] = "auto",
+        help="Score of the comparison: auto (per-group accuracy where every run decides groups "
+        "of trials together, a config's data.decide_by; else per-trial accuracy where every "
+        "run votes per trial, e.g. texture; else accuracy per window), accuracy, macro_f1, "
+        "trial_accuracy, group_accuracy or f1:<class>.")] = "auto",
 ) -> None:
     """Write one self-contained HTML page (figures embedded): where every number comes
     from (each result tagged recorded, simulated or synthetic, recorded data first), the

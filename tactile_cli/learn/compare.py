@@ -192,6 +192,8 @@ class Comparison:
             return "macro F1"
         if self.metric == "trial_accuracy":
             return "per-trial accuracy"
+        if self.metric == "group_accuracy":
+            return "per-group accuracy"
         return f"F1 of class {self.metric.split(':', 1)[1]!r}"
 
     def as_dict(self) -> dict[str, Any]:
@@ -297,6 +299,14 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
             raise InputError(f"head {head_name!r} has no per-trial result (only trial-level "
                              "targets are voted per trial); compare by accuracy", path=path)
         value = votes.get("majority_accuracy")
+    elif metric == "group_accuracy":
+        pooled = head.get("per_group")
+        if not isinstance(pooled, dict):
+            raise InputError(f"head {head_name!r} has no per-group result (a config's "
+                             "`data.decide_by` label pools trials into groups, e.g. the "
+                             "cameras of one experiment); compare by trial_accuracy",
+                             path=path)
+        value = pooled.get("majority_accuracy")
     elif metric.startswith("f1:"):
         cls = metric.split(":", 1)[1]
         found = [c for c in head["per_class"] if c["name"] == cls]
@@ -306,8 +316,8 @@ def _score(metrics: dict[str, Any], metric: str, path: Path) -> float:
                              path=path)
         value = found[0]["f1"]
     else:
-        raise InputError("`metric` must be accuracy, macro_f1, trial_accuracy or f1:<class>, "
-                         f"got {metric!r}")
+        raise InputError("`metric` must be accuracy, macro_f1, trial_accuracy, "
+                         f"group_accuracy or f1:<class>, got {metric!r}")
     if value is None or not math.isfinite(value):
         raise InputError(f"{metric} is not a number in this evaluation (no windows of the "
                          "class?)", path=path)
@@ -321,6 +331,8 @@ def _score_ci(metrics: dict[str, Any], metric: str) -> list[float] | None:
         ci = head.get(f"{metric}_ci95")
     elif metric == "trial_accuracy":
         ci = (head.get("per_trial") or {}).get("majority_accuracy_ci95")
+    elif metric == "group_accuracy":
+        ci = (head.get("per_group") or {}).get("majority_accuracy_ci95")
     else:
         ci = None
     if (isinstance(ci, list) and len(ci) == 2

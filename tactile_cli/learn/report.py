@@ -425,15 +425,22 @@ def _overview_section(results: Sequence[_Result]) -> str:
 # -- comparisons -----------------------------------------------------------------------------
 def _comparison_extra(points_metrics: Sequence[dict[str, Any]]
                       ) -> tuple[list[str], list[list[str]]]:
-    """Columns the comparison table gains when some run has them: per-trial accuracy and the
+    """Columns the comparison table gains when some run has them: per-trial accuracy,
+    per-group accuracy (trials decided together, ``data.decide_by``) and the
     cross-validated mean ± sd."""
     per_trial = [_dict(_primary(m).get("per_trial")) for m in points_metrics]
+    per_group = [_dict(_primary(m).get("per_group")) for m in points_metrics]
     cvs = [_dict(m.get("cv")) for m in points_metrics]
     header, cols = [], []
     if any(p.get("majority_accuracy") is not None for p in per_trial):
         header.append("per trial (%) [95 % CI]")
         cols.append([_pct_ci(p.get("majority_accuracy"), p.get("majority_accuracy_ci95"))
                      for p in per_trial])
+    if any(p.get("majority_accuracy") is not None for p in per_group):
+        by = sorted({str(p["by"]) for p in per_group if p.get("by")})
+        header.append(f"per {' / '.join(by) or 'group'} (%) [95 % CI]")
+        cols.append([_pct_ci(p.get("majority_accuracy"), p.get("majority_accuracy_ci95"))
+                     for p in per_group])
     if any(c for c in cvs):
         header.append("CV accuracy (%, mean ± sd)")
         cols.append([_mean_sd(c.get("accuracy_mean"), c.get("accuracy_std")) for c in cvs])
@@ -484,7 +491,10 @@ def _comparison_sections(run_dirs: Sequence[Path], results: Sequence[_Result],
             mine = [r for r in results if r.name == name and str(r.run) in {str(d) for d in dirs}]
             voted = mine and all(isinstance(_primary(r.metrics).get("per_trial"), dict)
                                  for r in mine)
-            chosen = "trial_accuracy" if voted else "accuracy"
+            pooled = mine and all(isinstance(_primary(r.metrics).get("per_group"), dict)
+                                  for r in mine)
+            chosen = ("group_accuracy" if pooled else "trial_accuracy" if voted
+                      else "accuracy")
         try:
             cmp = compare(dirs, data_name=name, margin_pp=margin_pp, metric=chosen)
         except TactileError as exc:

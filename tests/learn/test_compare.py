@@ -178,6 +178,28 @@ def test_compare_by_per_trial_accuracy_of_a_trial_level_target(tmp_path):
         compare([a, c], metric="trial_accuracy")
 
 
+def test_compare_by_per_group_accuracy_of_trials_decided_together(tmp_path):
+    """Per trial the first run wins; per experiment (both cameras decided together, a
+    config's `decide_by`) the second, with the group interval carried to the chart."""
+    a = fake_run(tmp_path, "a", "mlp", accuracy=0.80, latency_ms=0.1, n_params=10)
+    b = fake_run(tmp_path, "b", "cnn2d_frames", accuracy=0.78, latency_ms=0.2, n_params=20)
+    for run, trial, group in ((a, 0.90, 0.85), (b, 0.88, 0.95)):
+        path = run / "eval" / "scene" / "metrics.json"
+        m = json.loads(path.read_text())
+        m["heads"]["action"]["per_trial"] = {"n_trials": 58, "majority_accuracy": trial}
+        m["heads"]["action"]["per_group"] = {"by": "experiment", "n_trials": 29,
+                                             "majority_accuracy": group,
+                                             "majority_accuracy_ci95": [group - 0.1, 1.0]}
+        path.write_text(json.dumps(m))
+    assert compare([a, b], metric="trial_accuracy").best.label == "mlp/a"
+    cmp = compare([a, b], metric="group_accuracy")
+    assert cmp.best.label == "cnn2d_frames/b" and cmp.metric_label == "per-group accuracy"
+    assert cmp.best.score == 0.95 and cmp.best.score_ci95 == [0.85, 1.0]
+    c = fake_run(tmp_path, "c", "lstm", accuracy=0.9, latency_ms=0.1, n_params=5)
+    with pytest.raises(InputError, match="has no per-group result"):
+        compare([a, c], metric="group_accuracy")
+
+
 def test_compare_accepts_a_file_derived_from_the_same_recordings(tmp_path):
     # the spatial run is evaluated on `tactile centroids scene.h5`'s output (another file,
     # whose source is scene.h5 with sha "a"*64): same recordings, same trials, one chart
@@ -253,7 +275,8 @@ def test_cli_compare_table_files_json_and_errors(runs, tmp_path):
     assert len(bad.stderr.strip().splitlines()) == 1
     metric = runner.invoke(app, ["compare", *dirs, "--metric", "recall"])
     assert metric.exit_code == 2
-    assert ("--metric must be accuracy, macro_f1, trial_accuracy or f1:<class>, got 'recall'"
+    assert ("--metric must be accuracy, macro_f1, trial_accuracy, group_accuracy or f1:<class>, "
+            "got 'recall'"
             in metric.stderr)
 
 

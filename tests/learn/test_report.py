@@ -150,3 +150,22 @@ def test_cli_report_prints_the_page_path(runs, heldout_file, action_file, tmp_pa
     no_out = runner.invoke(app, ["report", str(runs["lstm"])])
     assert no_out.exit_code == 2
     assert no_out.stderr == "tactile: error: give the output folder with --out DIR\n"
+
+
+def test_the_comparison_table_gains_per_group_accuracy_where_runs_have_it():
+    """Trials decided together (`decide_by`, e.g. both cameras of an experiment): the
+    comparison table shows the per-group figure with its interval beside the per-trial one;
+    a run without it gets an empty cell."""
+    from tactile_cli.learn.report import _comparison_extra
+
+    def metrics(group):
+        head = {"per_trial": {"majority_accuracy": 0.9, "majority_accuracy_ci95": [0.8, 0.95]}}
+        if group is not None:
+            head["per_group"] = {"by": "experiment", "majority_accuracy": group,
+                                 "majority_accuracy_ci95": [group - 0.1, 1.0]}
+        return {"primary_head": "slip", "heads": {"slip": head}}
+
+    header, cols = _comparison_extra([metrics(0.93), metrics(None)])
+    assert header == ["per trial (%) [95 % CI]", "per experiment (%) [95 % CI]"]
+    assert cols[1] == ["93.00 [83.00, 100.00]", ""]
+    assert _comparison_extra([metrics(None)])[0] == ["per trial (%) [95 % CI]"]
