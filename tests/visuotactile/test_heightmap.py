@@ -246,3 +246,8 @@ def test_cli_stride_is_recorded_and_checked(scene: dict[str, Path], tmp_path: Pa
     assert bad.exit_code == 2
     assert "--skip-below and --stride > 1 cannot be combined" in bad.output
     assert not (tmp_path / "h3.h5").exists()
+    wide = runner.invoke(app, ["heightmap", str(scene["frames"]), "--model", str(scene["run"]),
+                               "--out", str(tmp_path / "h4.h5"), "--stride", "40"])
+    assert wide.exit_code == 2
+    assert "--stride (=40) must be a whole number of pixels from 1 to 16" in wide.output
+    assert "Traceback" not in wide.output and not (tmp_path / "h4.h5").exists()
