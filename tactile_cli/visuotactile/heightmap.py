@@ -88,10 +88,7 @@ class HeightMapper:
         if self.skip_below is not None and not (np.isfinite(self.skip_below)
                                                 and self.skip_below >= 0):
             raise InputError(f"`skip_below` (={self.skip_below}) must be >= 0 colour units")
-        self.stride = check_stride(self.stride)
-        if self.stride > 1 and self.skip_below is not None:
-            raise InputError("`skip_below` and `stride` > 1 cannot be combined: choose one "
-                             "way of skipping work")
+        self.stride = check_stride(self.stride, skip_below=self.skip_below)
 
     def solver(self, height: int, width: int) -> PoissonSolver:
         """The Poisson solver of a (height, width) gradient grid (at the mapper's stride:
@@ -142,17 +139,22 @@ class HeightMapper:
         return (rows[:, c0] * (1 - cw) + rows[:, c1] * cw).astype(np.float32, copy=False)
 
 
-#: the largest block side of ``stride``: a 16 x 16 block is 1.7 mm at a DIGIT's 9.4 px/mm
+#: the largest block side of ``stride``: a 16 x 16 block is 1.7 mm at 9.45 px/mm (the
+#: GelSight presses in ../shared/data)
 MAX_STRIDE = 16
 
 
-def check_stride(value: object) -> int:
-    """``value`` as a block side from 1 to :data:`MAX_STRIDE`; one InputError otherwise."""
+def check_stride(value: object, *, skip_below: float | None = None) -> int:
+    """``value`` as a block side from 1 to :data:`MAX_STRIDE`; one InputError otherwise, or
+    when blocks (``value`` > 1) come with ``skip_below`` (two ways of skipping work)."""
     ok = (isinstance(value, int | np.integer) and not isinstance(value, bool)
           and 1 <= value <= MAX_STRIDE)
     if not ok:
         raise InputError(f"`stride` (={value!r}) must be a whole number of pixels from 1 to "
                          f"{MAX_STRIDE}")
+    if value > 1 and skip_below is not None:  # type: ignore[operator]
+        raise InputError("`skip_below` and `stride` > 1 cannot be combined: choose one way "
+                         "of skipping work")
     return int(value)  # type: ignore[arg-type]
 
 
@@ -351,10 +353,7 @@ def heightmap_file(path: str | Path, run_dir: str | Path, out: str | Path, *,
     with limit_threads(threads):
         model = NormalModel.from_run(run_dir)
     run_path = Path(run_dir)
-    stride = check_stride(stride)
-    if stride > 1 and skip_below is not None:
-        raise InputError("`skip_below` and `stride` > 1 cannot be combined: choose one way "
-                         "of skipping work")
+    stride = check_stride(stride, skip_below=skip_below)  # before the model is loaded
     config = {"run": str(run_dir), "px_per_mm": px_per_mm, "skip_below": skip_below,
               "stride": stride,
               "truth": None if truth_dir is None else str(truth_dir),

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 import threading
+import weakref
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -44,7 +45,8 @@ _KIND_CHANNELS = {"difference": {"x", "y", "dR", "dG", "dB"},
                   "absolute": {"x", "y", "R", "G", "B"}}
 _HEADS = ("nx", "ny", "nz")
 #: pixels per tile: 4096 x 33 float32 = 528 KiB per activation buffer (inside this
-#: Xeon's 1 MiB L2 with the weights); 2048 was 15 % slower a frame at 320x240
+#: machine's 1 MiB L2 per core); 1,024, 2,048 and 8,192 were not faster at 320x240 in
+#: interleaved timings
 TILE_PX = 4096
 
 
@@ -82,6 +84,8 @@ class NormalModel:
     _input_cache: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict, repr=False)
     _aug: tuple[np.ndarray, list[np.ndarray], np.ndarray] | None = field(default=None,
                                                                           repr=False)
+    _halved: tuple[np.ndarray, list[np.ndarray], np.ndarray] | None = field(default=None,
+                                                                             repr=False)
     #: per worker tile buffers, the worker threads (kept across frames), one caller a time
     _buffers: dict[int, tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False)
     _pool: tuple[int, ThreadPoolExecutor] | None = field(default=None, repr=False)
@@ -208,13 +212,8 @@ class NormalModel:
         K = 3 products, so no (n, 6) input is assembled column by column: numpy's strided
         column copies cost more than the network's first layer), and the last layer writes
         its outputs planar, (3, rows), which the sinks read as contiguous rows."""
-        first, hidden, w_out = self._augmented()
+        first, hidden, w_out_t = self._tile_weights()
         w_colour, w_pos = first[:3], first[3:]
-        # ReLU as x + |x| = 2 ReLU(x) (two plain float passes, no mask), the 2 taken back
-        # by halving the next layer's weights: exact in binary floating point, so the
-        # products and sums are the same bits as ReLU(x) @ W
-        hidden = [w * np.float32(0.5) for w in hidden]
-        w_out_t = np.ascontiguousarray(w_out.T * np.float32(0.5))  # (3, h + 1)
         n = colour.shape[0]
         # layers may differ in width (e.g. 5-32-16-3): flat buffers of the widest, each
         # layer's activations a contiguous (rows, width) view at their start
@@ -261,18 +260,31 @@ class NormalModel:
             if self._pool is None or self._pool[0] != workers:
                 if self._pool is not None:
                     self._pool[1].shutdown()
-                self._pool = (workers, ThreadPoolExecutor(workers,
-                                                          thread_name_prefix="normals"))
+                pool = ThreadPoolExecutor(workers, thread_name_prefix="normals")
+                weakref.finalize(self, pool.shutdown, wait=False)  # threads end with the model
+                self._pool = (workers, pool)
             list(self._pool[1].map(tiles, range(workers),
                                    [range(i * TILE_PX, n, workers * TILE_PX)
                                     for i in range(workers)]))
 
+    def _tile_weights(self) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """:meth:`_augmented`'s weights as the tiles use them, made once: ReLU is taken as
+        x + |x| = 2 ReLU(x) (two plain float passes, no mask) and the 2 taken back by
+        halving every layer after the first (exact in binary floating point: the products
+        and sums are the same bits as ReLU(x) @ W); the last layer transposed, (3, h + 1),
+        to write its outputs planar."""
+        if self._halved is None:
+            first, hidden, w_out = self._augmented()
+            self._halved = (first, [w * np.float32(0.5) for w in hidden],
+                            np.ascontiguousarray(w_out.T * np.float32(0.5)))
+        return self._halved
+
     def _tile_buffers(self, worker: int, widest: int
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Worker ``worker``'s tile buffers (two activations, |x| of the ReLU, the outputs),
-        kept across frames: fresh ones are new pages every frame, and two threads
-        faulting pages in at once serialise on the kernel's memory map (measured: 2
-        workers were 1.3x one instead of 2x)."""
+        kept across frames with the worker threads (measured with the paper's network at
+        320x240 on two workers: 13.4 ms a frame with fresh buffers and threads per frame,
+        10.0 ms with kept ones)."""
         bufs = self._buffers.get(worker)
         if bufs is None or bufs[0].size < TILE_PX * widest:
             bufs = (np.empty(TILE_PX * widest, dtype=np.float32),
