@@ -9,7 +9,12 @@ child processes (imports off the clock):
 
 - **reader alone**: the container reader iterating every message of the three mapped topics
   and deserialising it (rosbags ``AnyReader`` + its typestore for bags; ``mcap``'s reader +
-  the same typestore for MCAP): the floor of any ingest of these messages;
+  the same typestore for MCAP), what a user's own export script would do first;
+- **reader, raw**: the same reader iterating the same messages without deserialising them:
+  the floor of any ingest (``reader_raw_s``, ``ratio_vs_raw`` = ingest / raw rate). The
+  ingest reads the rows of the arrays and wrenches straight from the messages' bytes
+  (``tactile_cli.ingest.robot_layouts``), so it deserialises only the frames (and each
+  topic's first message, to check the raw reader against the deserialiser);
 - **tactile ingest**: ``tactile_cli.ingest.ingest`` end to end with
   ``configs/rosbag_tactile_rig.yaml`` (decode, image to RGB, stamps, gzip level 1 frames
   and signal chunks, deflated by ISA-L in the store's thread pool, SHA-256 of the
@@ -90,6 +95,14 @@ def _child(kind: str, src: str, out: str, level: int | None) -> dict[str, float]
 
         start = time.perf_counter()
         ingest([src], out, overwrite=True, command="benchmark", compression=Compression(level))
+        seconds = time.perf_counter() - start
+    elif kind == "reader_raw":
+        from tactile_cli.ingest.robot_recording import RobotRecording
+
+        start = time.perf_counter()
+        with RobotRecording(Path(src)) as rec:
+            for _ in rec.raw_messages(TOPICS):
+                n += 1
         seconds = time.perf_counter() - start
     elif kind == "reader":
         from tactile_cli.ingest.robot_recording import RobotRecording
@@ -190,6 +203,7 @@ def main() -> None:
         level = None if args.compression < 0 else args.compression
         load = [os.getloadavg()[0]]
         reader = [_run_child("reader", src, root / "x.h5", level) for _ in range(args.repeat)]
+        raw = [_run_child("reader_raw", src, root / "x.h5", level) for _ in range(args.repeat)]
         tactile = [_run_child("ingest", src, root / "o.h5", level) for _ in range(args.repeat)]
         load.append(os.getloadavg()[0])
         out_mb = (root / "o.h5").stat().st_size / 1e6
@@ -197,6 +211,7 @@ def main() -> None:
         video = _video(root, args, level) if args.video_s > 0 else {}
     reader_s = statistics.median(r["seconds"] for r in reader)
     ingest_s = statistics.median(r["seconds"] for r in tactile)
+    raw_s = statistics.median(r["seconds"] for r in raw)
     result = {
         "container": args.container, "recording_mb": round(size / 1e6, 1),
         "recording_s": round(seconds, 1), "messages": int(reader[0]["messages"]),
@@ -205,6 +220,8 @@ def main() -> None:
         "reader_alone_mb_s": round(size / 1e6 / reader_s, 1),
         "ingest_mb_s": round(size / 1e6 / ingest_s, 1),
         "ratio": round(reader_s / ingest_s, 3),
+        "reader_raw_s": round(raw_s, 2), "reader_raw_mb_s": round(size / 1e6 / raw_s, 1),
+        "ratio_vs_raw": round(raw_s / ingest_s, 3),
         "peak_rss_mb": round(max(r["peak_rss_mb"] for r in tactile), 1),
         "reader_peak_rss_mb": round(max(r["peak_rss_mb"] for r in reader), 1),
         "reader_cpu_s": round(statistics.median(r["cpu_s"] for r in reader), 1),

@@ -59,6 +59,7 @@ from ..progress import Progress
 from ..store.provenance import sha256_of
 from ..store.writer import SIGNAL_CHUNK_BYTES, StoreWriter
 from .contract import FormatOptions, IngestFormat, RecordingSummary, StreamSummary, TrialSummary
+from .robot_layouts import raw_rows
 from .robot_messages import (
     check_path,
     compressed_rgb,
@@ -214,8 +215,9 @@ class _Rows:
     takes each full block; a trial that ends within its first block is written in one
     piece."""
 
-    values: list[np.ndarray] = field(default_factory=list)
+    values: list[Any] = field(default_factory=list)  # rows, or the messages' bytes
     t_ns: list[int] = field(default_factory=list)
+    index: list[int] = field(default_factory=list)  # of the bytes' messages in the topic
     appender: Any = None  # SignalAppender, made when the first block is full
 
 
@@ -249,6 +251,8 @@ class _Stream:
     ref_first: tuple[int, bytes] | None = None
     ref_latest: tuple[int, bytes] | None = None
     ref_seen: int = 0
+    fast: Any = None  # RawRows: rows read from the bytes (robot_layouts)
+    fast_checked: bool = False  # whether the first message of this recording decided it
 
 
 def ingest_robot(inputs: Sequence[Path], options: RobotOptions, writer: StoreWriter,
@@ -315,6 +319,7 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
                                                   rec.decoder(spec.topic))
             else:  # the next recording of a multi-recording ingest
                 st.decode, st.newest = rec.decoder(spec.topic), -1
+                st.fast, st.fast_checked = None, False  # checked again on this recording
             by_topic[spec.topic] = st
             st.ref_first = st.ref_latest = None
             st.ref_seen = 0
@@ -331,8 +336,15 @@ def _ingest_one(path: Path, mapping: TopicMapping, options: RobotOptions, writer
             st = by_topic.get(topic)
             if st is None:
                 continue
-            msg = st.decode(raw)
-            _take(st, msg, log_ns, mapping, rec, trials, starts, writer, options)
+            fast = st.fast
+            if fast is not None:  # a standard layout, its rows read from the bytes per block
+                t_ns = fast.stamp(raw, st.n) if st.use_header else log_ns
+                placed = _place(st, t_ns, rec, trials, starts, writer, options)
+                if placed is not None:
+                    _append_row(st, raw, t_ns, placed, rec, trials)
+            else:
+                _take(st, st.decode(raw), raw, log_ns, mapping, rec, trials, starts, writer,
+                      options)
             progress.advance(1)
         progress.finish()
         for st in by_topic.values():
@@ -359,17 +371,18 @@ def _stamp(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping) -> int:
     return header if st.use_header and header is not None else log_ns
 
 
-def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotRecording,
-          trials: list[_Trial], starts: list[int], writer: StoreWriter,
-          options: RobotOptions) -> None:
-    t_ns = _stamp(st, msg, log_ns, mapping)
+def _place(st: _Stream, t_ns: int, rec: RobotRecording, trials: list[_Trial],
+           starts: list[int], writer: StoreWriter, options: RobotOptions
+           ) -> tuple[int, int] | None:
+    """(trial, index in the stream) of a message stamped ``t_ns``, or None (counted) when it
+    falls outside every trial; trials before the one before it are written out."""
     if trials[0].span.takes_all:
         k = 0
     else:
         k = bisect.bisect_right(starts, t_ns) - 1
         if k < 0 or t_ns >= trials[k].span.end_ns:
             st.outside += 1
-            return
+            return None
     index = st.n
     st.n += 1
     if k > st.newest:  # trials before the one before this message's are complete
@@ -377,6 +390,17 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
         for done in [j for j in (set(st.stamps) | set(st.rows_of) | set(st.frames)
                                  | set(st.events)) if j < k - 1]:
             _flush(st, done, trials, rec, writer, options)
+    return k, index
+
+
+def _take(st: _Stream, msg: Any, raw: bytes, log_ns: int, mapping: TopicMapping,
+          rec: RobotRecording, trials: list[_Trial], starts: list[int], writer: StoreWriter,
+          options: RobotOptions) -> None:
+    t_ns = _stamp(st, msg, log_ns, mapping)
+    placed = _place(st, t_ns, rec, trials, starts, writer, options)
+    if placed is None:
+        return
+    k, index = placed
     spec = st.spec
     kind = spec.kind
     if kind == "visuotactile":  # spec.is_frames, without a property call per message
@@ -388,18 +412,62 @@ def _take(st: _Stream, msg: Any, log_ns: int, mapping: TopicMapping, rec: RobotR
             st.rows = row_reader(rec, spec.topic, st.msgtype, msg, spec.fields)
             _check_names(st, rec)
             st.block_rows = max(1, SIGNAL_CHUNK_BYTES // (4 * max(1, len(st.rows.channels))))
-        row = st.rows.read(msg)
-        if len(row) != len(st.rows.channels):
-            raise InputError(f"topic {spec.topic}, message {index}: {len(row)} values, but the "
-                             f"first message gave {len(st.rows.channels)}; a stream keeps one "
-                             "channel count", path=rec.path)
+        if not st.fast_checked:
+            st.fast, st.fast_checked = _raw_reader(st, rec, raw, msg), True
+        # with a raw reader, this message's bytes (they gave the same row) like the later ones'
+        _append_row(st, raw if st.fast is not None else st.rows.read(msg), t_ns, placed, rec,
+                    trials)
+
+
+def _raw_reader(st: _Stream, rec: RobotRecording, raw: bytes, msg: Any) -> Any:
+    """The stream's reader of rows straight from the bytes (:mod:`.robot_layouts`), used for
+    every message of this recording when the mapping takes the type's default values, the
+    recording defines the type as the standard one, and this first message gives the same
+    stamp and row both ways; else None, and the deserialiser reads every message."""
+    if st.spec.fields is not None or not rec.is_standard(st.msgtype):
+        return None
+    layout = getattr(msg, "layout", None)
+    offset = int(layout.data_offset) if layout is not None else 0
+    fast = raw_rows(rec.serialisation, st.msgtype, offset, st.spec.topic, rec.path)
+    if fast is None:
+        return None
+    try:
+        stamp, row = fast.stamp(raw, 0), fast.row(raw, 0)
+    except InputError:
+        return None
+    want = st.rows.read(msg)
+    if (stamp != header_stamp_ns(msg) or row.dtype != want.dtype
+            or not np.array_equal(row, want, equal_nan=True)):
+        return None
+    return fast
+
+
+def _append_row(st: _Stream, row: Any, t_ns: int, placed: tuple[int, int],
+                rec: RobotRecording, trials: list[_Trial]) -> None:
+    """Add one sampled row (or, with a raw reader, the message's bytes, read when the block
+    is written) to its trial's block, writing the block when it is full."""
+    k, index = placed
+    if not isinstance(row, np.ndarray):
         rows = st.rows_of.get(k)
         if rows is None:
             rows = st.rows_of[k] = _Rows()
         rows.values.append(row)
         rows.t_ns.append(t_ns)
+        rows.index.append(index)
         if len(rows.t_ns) >= st.block_rows:
             _spill(st, rows, trials[k])
+        return
+    if len(row) != len(st.rows.channels):
+        raise InputError(f"topic {st.spec.topic}, message {index}: {len(row)} values, but the "
+                         f"first message gave {len(st.rows.channels)}; a stream keeps one "
+                         "channel count", path=rec.path)
+    rows = st.rows_of.get(k)
+    if rows is None:
+        rows = st.rows_of[k] = _Rows()
+    rows.values.append(row)
+    rows.t_ns.append(t_ns)
+    if len(rows.t_ns) >= st.block_rows:
+        _spill(st, rows, trials[k])
 
 
 def _spill(st: _Stream, rows: _Rows, trial: _Trial) -> None:
@@ -410,8 +478,16 @@ def _spill(st: _Stream, rows: _Rows, trial: _Trial) -> None:
         rows.appender = trial.writer.signal(st.spec.name, sensor=st.spec.name,
                                             n_channels=len(st.rows.channels))
     t_s = (np.asarray(rows.t_ns, dtype=np.int64) - trial.span.start_ns) / 1e9
-    rows.appender.append(np.vstack(rows.values), t_s)
-    rows.values, rows.t_ns = [], []
+    rows.appender.append(_block(st, rows), t_s)
+    rows.values, rows.t_ns, rows.index = [], [], []
+
+
+def _block(st: _Stream, rows: _Rows) -> np.ndarray:
+    """(n_rows, n_channels) values of a block: rows as they are, or read from the messages'
+    bytes by the stream's raw reader."""
+    if rows.values and not isinstance(rows.values[0], np.ndarray):
+        return st.fast.rows(rows.values, rows.index, len(st.rows.channels))
+    return np.vstack(rows.values)
 
 
 def _check_names(st: _Stream, rec: RobotRecording) -> None:
@@ -580,7 +656,7 @@ def _flush(st: _Stream, k: int, trials: list[_Trial], rec: RobotRecording, write
                          "samples by stamp, or map the topic with `time: log`", path=rec.path)
     st.late += back
     if rows.appender is None:
-        data = np.vstack(rows.values)
+        data = _block(st, rows)
         if back:
             order = np.argsort(t_ns, kind="stable")
             t_ns, data = t_ns[order], data[order]

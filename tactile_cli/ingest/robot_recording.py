@@ -324,6 +324,35 @@ class RobotRecording:
         self._decoders[topic] = decode
         return decode
 
+    @property
+    def serialisation(self) -> str:
+        """How the messages are serialised: ``"ros1"`` (ROS 1 bags) or ``"cdr"`` (ROS 2 bags
+        and MCAP files)."""
+        return "ros1" if self.kind == "ros1" else "cdr"
+
+    def is_standard(self, msgtype: str) -> bool:
+        """Whether the recording defines ``msgtype``, and every type it nests, field for field
+        as the standard store of its ROS generation does (a bag may carry its own definition
+        under a standard name)."""
+        store, default = self._typestore, self._default
+        todo, seen = [msgtype], set()
+        while todo:
+            name = todo.pop()
+            if name in seen:
+                continue
+            seen.add(name)
+            if name not in store.fielddefs or name not in default.fielddefs:
+                return False
+            fields = store.fielddefs[name][1]
+            if fields != default.fielddefs[name][1]:
+                return False
+            for _, node in fields:
+                while node[0] in (3, 4):  # arrays and sequences of ...
+                    node = node[1][0]
+                if node[0] == 2:  # ... a nested message
+                    todo.append(node[1])
+        return True
+
     def fields_of(self, msgtype: str) -> list[tuple[str, tuple[Any, ...]]]:
         """The fields of a message type as ``(name, type node)``: rosbags' field
         definitions (see :mod:`tactile_cli.ingest.robot_messages`)."""
