@@ -25,6 +25,13 @@ at the default scale (2) and with the scale learned on the other objects (leave 
 out, as ``--scale auto`` does). There is no height source: no normal network was ever
 calibrated on these units (no ball presses of them exist).
 
+Beside both, the video's length alone (no touch at all): slip videos of this set mostly end
+early (the recording stops), wiggles run their 18 s, so a threshold on the duration,
+chosen on the other objects, decides most experiments; a model that sees where a video ends
+can lean on the same cue. ``lstm_32x24_motion_2s`` is blind to it: windows of 2 s (the
+shortest video) laid from the start, none padded, each experiment decided by the mean
+probability over all its windows.
+
 Intervals: 95 % Wilson on the pooled per-experiment decisions, and the bootstrap over
 experiments that ``tactile evaluate`` reports. Every variant tried is listed; none was
 chosen on data held apart, so the best of them is an optimistic pick.
@@ -75,6 +82,10 @@ K = 5
 #: config is ``lstm_32x24_motion`` (frame-to-frame change); the others difference every
 #: frame against the video's first frame (``change: reference``), as the first five did.
 _REF = {"change": "reference"}
+#: Windows of 2 s (10 samples at 5 fps; the shortest video has 10), every 1 s from the start,
+#: none padded: blind to where a video ends.
+_BLIND = {"window": 10, "stride": 5, "align": "start", "pad": "none"}
+_FLOW = {"width": 8, "height": 6, "change": "flow"}
 VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "lstm_16x12": {"data": {"frames": {"width": 16, "height": 12, **_REF}},
                    "model": {"channels": [8], "embed": 16, "hidden": 16}},
@@ -84,6 +95,20 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "lstm_32x24_motion": {},
     "tconv_32x24": {"data": {"frames": _REF},
                     "model": {"temporal": "conv", "temporal_layers": 2, "temporal_kernel": 5}},
+    # blind to the video's length; an experiment is decided by the mean probability over
+    # all the windows of its two videos
+    "lstm_32x24_motion_2s": {"data": _BLIND},
+    # only each video's first 2 s (one window, the same phase of every experiment: grasp and
+    # lift): blind to the length and to which phases a video's windows show
+    "lstm_32x24_motion_first2s": {"data": {**_BLIND, "stride": 1000}},
+    "lstm_flow_8x6_first2s": {"data": {**_BLIND, "stride": 1000, "window_norm": "none",
+                                       "frames": {"width": 8, "height": 6, "change": "flow"}}},
+    # the gel's motion (data.frames.change: flow): 8 x 6 blocks of 40 x 40 px, dy and dx
+    # since the kept frame before, in px; the same length-blind windows
+    "lstm_flow_8x6_2s": {"data": {**_BLIND, "window_norm": "none", "frames": _FLOW}},
+    "hgb_flow_8x6_2s": {"data": {**_BLIND, "window_norm": "none", "frames": _FLOW},
+                        "model": {"family": "hist_gb", "max_iter": 200, "learning_rate": 0.05,
+                                  "max_leaf_nodes": 8}},
 }
 #: ``--n-static`` of the intensity signal: the first 0.4 s (10 frames at 25 fps) set the
 #: threshold; the shortest video has 49 frames.
@@ -121,7 +146,11 @@ def ingest(source: Path, labels: Path, out: Path) -> list[str]:
 
 
 def variant_config(name: str, epochs: int | None) -> Any:
-    raw = apply_changes(yaml.safe_load(CONFIG.read_text()), VARIANTS[name])
+    changes = dict(VARIANTS[name])
+    raw = yaml.safe_load(CONFIG.read_text())
+    if "family" in changes.get("model", {}):  # another family: its own model section
+        raw["model"] = dict(changes.pop("model"))
+    raw = apply_changes(raw, changes)
     if epochs is not None:
         raw["optim"]["epochs"] = epochs
     return parse_config(raw)
@@ -176,6 +205,43 @@ def intensity_study(data: Path, rows: list[dict[str, Any]]) -> dict[str, Any]:
             "default_scale": {"scale": DEFAULT_SCALE, **_experiment_rate(default, truth)},
             "scale_by_object_cv": {"scales": chosen, **_experiment_rate(learned, truth)},
             "videos_with_static_start": static, "n_videos": len(result.trials)}
+
+
+def length_study(data: Path, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """How far the video's length alone decides: an experiment is called slipped when the
+    mean duration of its two videos is below a threshold chosen on the other objects (leave
+    one object out; the middle of the best range of thresholds). A model whose windows
+    show where a video ends (zero padding before a short video's first frame, a window laid
+    back from its last one) can read the same cue."""
+    import h5py
+
+    exp_of = {r["trial"]: r["experiment"] for r in rows}
+    obj_of = {r["experiment"]: r["object"] for r in rows}
+    truth = {r["experiment"]: bool(r["slipped"]) for r in rows}
+    durations: dict[str, list[float]] = {}
+    with h5py.File(data, "r") as h5:
+        for trial, group in h5["trials"].items():
+            t_s = group["frames/t_s"]
+            durations.setdefault(exp_of[trial], []).append(float(t_s[-1] - t_s[0]))
+    mean_s = {e: float(np.mean(d)) for e, d in durations.items()}
+    cuts = sorted(set(mean_s.values()))
+    candidates = [0.0] + [(a + b) / 2 for a, b in zip(cuts, cuts[1:], strict=False)] + [1e9]
+    chosen: dict[str, float] = {}
+    for obj in sorted(set(obj_of.values())):
+        inner = [e for e in truth if obj_of[e] != obj]
+        scores = [sum((mean_s[e] < c) == truth[e] for e in inner) for c in candidates]
+        best = [c for c, n in zip(candidates, scores, strict=True) if n == max(scores)]
+        chosen[obj] = best[len(best) // 2]
+    decisions = {e: mean_s[e] < chosen[obj_of[e]] for e in truth}
+    slips = sorted(mean_s[e] for e in truth if truth[e])
+    holds = sorted(mean_s[e] for e in truth if not truth[e])
+    return {"rule": "slipped when the experiment's mean video duration < threshold chosen "
+                    "on the other objects", "thresholds_s": chosen,
+            "duration_s_median": {"slipped": float(np.median(slips)),
+                                  "wiggle": float(np.median(holds))},
+            "full_length_share": {"slipped": float(np.mean(np.array(slips) > 17.0)),
+                                  "wiggle": float(np.mean(np.array(holds) > 17.0))},
+            **_experiment_rate(decisions, truth)}
 
 
 def run_one(name: str, data: Path, tmp: Path, *, epochs: int | None) -> dict[str, Any]:
@@ -238,6 +304,7 @@ def main(argv: list[str] | None = None) -> int:
             data = tmp / "gelsight_mini_slip.h5"
             ingest_cmd = ingest(args.source, tmp / "labels.csv", data)
         intensity = None if args.no_intensity else intensity_study(data, rows)
+        length = length_study(data, rows)
         cache_frame_series()
         results = []
         for name in args.variants:
@@ -261,7 +328,7 @@ def main(argv: list[str] | None = None) -> int:
         "target": {"per_experiment_accuracy": TARGET, "published": "Parag, Misimi and "
                    "Adelson: 99 % on unseen objects (video vision transformer)"},
         "smallest_reaching_target": reached[0]["variant"] if reached else None,
-        "intensity_signal": intensity, "results": results,
+        "intensity_signal": intensity, "video_length_alone": length, "results": results,
         "wall_time_s": time.perf_counter() - started,
     }
     out_json = args.out / (f"{args.name}.json" if args.name else "gelsight_mini_slip.json"
@@ -288,6 +355,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"| {label} | 0 | {i['accuracy']:.1%} [{i['wilson95'][0]:.1%}, "
                   f"{i['wilson95'][1]:.1%}] (detected {i['detected']:.0%}, false alarms "
                   f"{i['false_alarms']:.0%}) | | | 0 |")
+    print(f"| video length alone (no touch) | 0 | {length['accuracy']:.1%} "
+          f"[{length['wilson95'][0]:.1%}, {length['wilson95'][1]:.1%}] | | | 0 |")
     print(f"wrote {out_json} ({record['wall_time_s']:.0f} s)")
     print(json.dumps({"smallest_reaching_target": record["smallest_reaching_target"]}))
     return 0

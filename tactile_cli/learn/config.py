@@ -205,18 +205,36 @@ class FramesConfig(_Model):
     """The frame subtracted: the trial's stored no-contact frame (``frames/reference``;
     ``tactile ingest --reference first`` stores each folder's first frame), or the trial's
     own first frame."""
-    change: Literal["reference", "previous"] = "reference"
+    change: Literal["reference", "previous", "flow"] = "reference"
     """What each frame is a difference from: the reference (the change since no contact),
     or the kept frame before it (``previous``: the motion between samples, the first
-    kept frame still minus the reference)."""
+    kept frame still minus the reference). ``flow``: not a difference of levels but the
+    gel's motion since the kept frame before it (the first since the reference), measured
+    in ``height`` x ``width`` blocks of the grey camera frame by phase correlation
+    (:mod:`.frame_flow`): planes ``dy`` and ``dx`` in camera px; for marker skins and
+    textured gels, whose pattern area-averaging blurs away."""
     step: int = Field(default=1, ge=1, le=1000)
     """Keep every ``step``-th frame of a trial (frames 0, step, 2 step, ...; the sample
     period grows by ``step``): a 25 fps video of 450 frames becomes 90 samples at 5 fps
     with ``step: 5``. The reference is unchanged."""
 
+    @model_validator(mode="after")
+    def _flow_is_grey(self) -> FramesConfig:
+        if self.change == "flow" and self.colour:
+            raise ValueError("`change: flow` measures the motion of the grey frame; set "
+                             "`colour: false`")
+        return self
+
     @property
     def planes(self) -> tuple[str, ...]:
+        if self.change == "flow":
+            return ("dy", "dx")
         return ("r", "g", "b") if self.colour else ("grey",)
+
+    @property
+    def unit(self) -> str:
+        """The unit of every channel: levels of the 8-bit camera, or px of motion."""
+        return "px" if self.change == "flow" else "levels"
 
     @property
     def n_values(self) -> int:

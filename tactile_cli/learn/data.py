@@ -252,7 +252,7 @@ def _read_trial(trial: Trial, data: DataConfig, sample_targets: list[str], train
 def _read_frames(trial: Trial, data: DataConfig, sample_targets: list[str], trained: bool
                  ) -> TrialSeries:
     """A trial's image frames as the series of :mod:`.frames` (``data.stream: frames``)."""
-    from .frames import FRAME_UNIT, frame_channel_names, frame_series, select_columns
+    from .frames import frame_channel_names, frame_series, select_columns
 
     assert data.frames is not None
     path, where = trial.path, f"{trial.where}/frames"
@@ -278,7 +278,7 @@ def _read_frames(trial: Trial, data: DataConfig, sample_targets: list[str], trai
     period = float(np.median(steps)) if steps.size and np.median(steps) > 0 else math.nan
     return TrialSeries(str(path), trial.name, trial.split, x, t_s, {}, {}, trial.labels,
                        "frames", frames.sensor_name, period, tuple(data.channels),
-                       (FRAME_UNIT,) * len(data.channels), _time_origin(trial))
+                       (data.frames.unit,) * len(data.channels), _time_origin(trial))
 
 
 def _count_events(trial: Trial, data: DataConfig, sample_targets: list[str]) -> TrialSeries:

@@ -27,7 +27,7 @@ from .config import FramesConfig
 
 #: ITU-R BT.601 luma weights of red, green and blue.
 LUMA = np.array([0.299, 0.587, 0.114], dtype=np.float32)
-#: The unit of every frame channel.
+#: The unit of every frame channel of a difference of levels (``change: flow``: px).
 FRAME_UNIT = "levels"
 
 
@@ -95,14 +95,43 @@ def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
                              "first, or ingest the folder with its no-contact frame",
                              path=frames.path,
                              where=frames.where) from None
-    ref = _planes(area_downsample(reference, cfg.height, cfg.width), cfg)
     kept = range(0, frames.n_frames, cfg.step)
+    if cfg.change == "flow":
+        return _flow_series(frames, reference, kept, cfg)
+    ref = _planes(area_downsample(reference, cfg.height, cfg.width), cfg)
     out = np.empty((len(kept), cfg.n_values), np.float32)
     for i, k in enumerate(kept):
         small = _planes(area_downsample(frames[k], cfg.height, cfg.width), cfg)
         out[i] = small - ref
         if cfg.change == "previous":
             ref = small
+    return out
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 -> (H, W) float64 luma."""
+    return image.astype(np.float64) @ LUMA.astype(np.float64)
+
+
+def _flow_series(frames: Frames, reference: np.ndarray, kept: range, cfg: FramesConfig
+                 ) -> np.ndarray:
+    """(len(kept), 2 * height * width) float32: each kept frame's block shifts (dy plane,
+    then dx plane) since the kept frame before it (the first: since the reference)."""
+    from .frame_flow import MIN_BLOCK_PX, block_shifts, block_size
+
+    bh, bw = block_size(frames.shape[0], frames.shape[1], cfg.height, cfg.width)
+    if min(bh, bw) < MIN_BLOCK_PX:
+        raise InputError(f"data.frames with `change: flow` cuts {frames.shape[1]} x "
+                         f"{frames.shape[0]} px frames into {cfg.width} x {cfg.height} blocks "
+                         f"of {bw} x {bh} px; a block needs at least {MIN_BLOCK_PX} px a "
+                         "side: lower data.frames.width and height", path=frames.path,
+                         where=frames.where)
+    before = _grey(reference)
+    out = np.empty((len(kept), cfg.n_values), np.float32)
+    for i, k in enumerate(kept):
+        grey = _grey(frames[k])
+        out[i] = block_shifts(before, grey, cfg.height, cfg.width).transpose(2, 0, 1).ravel()
+        before = grey
     return out
 
 
