@@ -4,7 +4,7 @@ Data: ../shared/data/gelsight_mini_slip, the incipient-slip set of Parag, Misimi
 (two GelSight Mini sensors on a Franka gripper grasp, lift and shake everyday objects;
 published 99 % "zero-shot" on unseen objects with a video vision transformer): 29 objects,
 150 experiments (65 slipped: the folder holds ``slip.txt``; 85 wiggles), two cameras per
-experiment, XVID 320 x 240 at 25 fps, 228-450 frames. Every video is one trial, ingested
+experiment, XVID 320 x 240 at 25 fps, 49-450 frames. Every video is one trial, ingested
 exactly as a user would::
 
     tactile ingest ../shared/data/gelsight_mini_slip/*/exp_num_* --trial-labels labels.csv \\

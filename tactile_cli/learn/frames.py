@@ -54,10 +54,15 @@ def area_downsample(image: np.ndarray, height: int, width: int) -> np.ndarray:
     return (summed / counts[:, :, None]).astype(np.float32)
 
 
+def _grey(image: np.ndarray) -> np.ndarray:
+    """(H, W, 3) pixels -> (H, W) float64 luma."""
+    return image.astype(np.float64) @ LUMA.astype(np.float64)
+
+
 def _planes(small: np.ndarray, cfg: FramesConfig) -> np.ndarray:
     """(height, width, 3) -> (planes * height * width,) plane-major."""
     if not cfg.colour:
-        small = (small.astype(np.float64) @ LUMA.astype(np.float64))[:, :, None]
+        small = _grey(small)[:, :, None]
     return np.ascontiguousarray(small.transpose(2, 0, 1), dtype=np.float32).reshape(-1)
 
 
@@ -106,11 +111,6 @@ def frame_series(frames: Frames, cfg: FramesConfig) -> np.ndarray:
         if cfg.change == "previous":
             ref = small
     return out
-
-
-def _grey(image: np.ndarray) -> np.ndarray:
-    """(H, W, 3) uint8 -> (H, W) float64 luma."""
-    return image.astype(np.float64) @ LUMA.astype(np.float64)
 
 
 def _flow_series(frames: Frames, reference: np.ndarray, kept: range, cfg: FramesConfig
