@@ -154,7 +154,28 @@ def _fit(estimator: Any, x: np.ndarray, y: np.ndarray, weights: np.ndarray | Non
             hint = "raise model.max_iter or lower model.c" if family in ("logistic", "svm") \
                 else "check the inputs"
             out.append(f"{family}: the solver did not converge ({hint})")
-    return sorted(set(out))
+    stump = _no_split_note(estimator, family, len(y))
+    return sorted(set(out)) + ([stump] if stump else [])
+
+
+def _no_split_note(estimator: Any, family: str, n_windows: int) -> str | None:
+    """A sentence when no tree of a fitted forest or boosting made a single split, else
+    None. Such a model predicts the same probabilities for every window (the classes'
+    share in the training windows): with boosting's default ``min_samples_leaf`` of 20, a
+    fold of under 40 training windows cannot split at all, and nothing else says so."""
+    if family == "random_forest":
+        trees = [t.tree_.node_count for t in estimator.estimators_]
+    elif family == "hist_gb":
+        trees = [pred.nodes.shape[0] for it in estimator._predictors for pred in it]
+    else:
+        return None
+    if any(n > 1 for n in trees):
+        return None
+    leaf = getattr(estimator, "min_samples_leaf", None)
+    return (f"{family}: no tree made a split on the {n_windows} training windows "
+            f"(each leaf needs model.min_samples_leaf = {leaf} windows): the model gives "
+            "every window the same probabilities; lower model.min_samples_leaf or train on "
+            "more windows")
 
 
 # -- the model as the rest of learn/ sees it -------------------------------------------------

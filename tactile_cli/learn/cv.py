@@ -167,7 +167,16 @@ def _train_fold(config_yaml: dict[str, Any], paths: list[str], fold_dir: str,
     return {"best_epoch": result.best_epoch, "epochs_run": len(result.history),
             "train_time_s": result.train_time_s, "n_trials": result.n_trials,
             "n_windows": result.n_windows, "best_val_loss": result.best_val_loss,
-            "best_val_accuracy": result.best_val_accuracy}
+            "best_val_accuracy": result.best_val_accuracy,
+            "notes": _fit_notes(Path(fold_dir))}
+
+
+def _fit_notes(fold_dir: Path) -> list[str]:
+    """What the fit of a fold's model said about itself (``training.notes`` of its
+    ``run.json``: a classic family's solver that did not converge, trees that could not
+    split); [] for a network."""
+    info = runs.read_run_info(fold_dir)
+    return [str(n) for n in info.get("training", {}).get("notes", [])]
 
 
 def train_cv(
@@ -255,7 +264,8 @@ def train_cv(
                             "epochs_run": info["training"].get("epochs_run"),
                             "train_time_s": info["training"].get("train_time_s"),
                             "n_trials": info["split"].get("trials"),
-                            "n_windows": info["split"].get("windows"), "resumed": True}
+                            "n_windows": info["split"].get("windows"), "resumed": True,
+                            "notes": _fit_notes(partial / FOLDS_DIR / fold_name(index))}
     info = _parent_info(config, paths, plan, record, summaries, partial, command, config_path)
     info["wall_time_s"] = time.perf_counter() - started
     runs.write_json(partial / runs.RUN_JSON, info, overwrite=True)
@@ -267,7 +277,9 @@ def train_cv(
     swap_into_place(partial, out)
     return CvTrainResult(out, config.model.family, plan.k, len(plan.folds), plan.mode, plan.by,
                          sorted(finished), [f.index for f in todo], jobs,
-                         info["wall_time_s"], list(plan.warnings),
+                         info["wall_time_s"],
+                         list(plan.warnings) + [f"fold {i}: {note}" for i in sorted(summaries)
+                                                for note in summaries[i].get("notes", [])],
                          [{"fold": i, **summaries[i]} for i in sorted(summaries)])
 
 

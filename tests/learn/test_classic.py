@@ -161,6 +161,17 @@ def test_cross_validation_of_a_classic_family(action_file, tmp_path):
         == metrics.n_windows
 
 
+def test_cross_validation_names_each_fold_whose_trees_could_not_split(action_file, tmp_path):
+    cfg = tiny_config(model={"family": "hist_gb", "max_iter": 3, "min_samples_leaf": 100_000},
+                      data={"split": {"mode": "random", "val_fraction": 0.0}})
+    result = train_cv(cfg, [action_file], tmp_path / "cv", k=2, jobs=1, command="tests")
+    said = [w for w in result.warnings if "no tree made a split" in w]
+    assert [w.split(":")[0] for w in said] == ["fold 0", "fold 1"]
+    assert "model.min_samples_leaf = 100000" in said[0]
+    info = json.loads((tmp_path / "cv" / "run.json").read_text())
+    assert [len(f["notes"]) for f in info["training"]["folds"]] == [1, 1]
+
+
 def test_a_damaged_model_onnx_is_one_input_error(runs, heldout_file, tmp_path):
     import shutil
 
@@ -193,3 +204,33 @@ def test_a_training_split_of_one_class_is_refused_before_writing(tmp_path):
     est = classic.build_estimator(tiny_config(model=MODELS["logistic"]))
     with pytest.raises(InputError, match="the logistic model cannot be fitted"):
         classic._fit(est, np.zeros((5, 2)), np.zeros(5, np.int64), None, "logistic")
+
+
+@pytest.mark.parametrize("family", ["hist_gb", "random_forest"])
+def test_trees_that_cannot_split_are_named_in_the_fit_notes(family):
+    """9 training windows of two classes: boosting's default leaf of 20 windows cannot
+    split, and a forest with a leaf of 10 cannot either; both fits say so, and a leaf of 1
+    says nothing."""
+    rng = np.random.default_rng(0)
+    z = rng.standard_normal((9, 6))
+    y = np.array([0, 1] * 4 + [1])
+    z[y == 1, 0] += 3.0  # separable on the first column
+
+    def notes(extra):
+        cfg = parse_config({"data": {"stream": "s", "channels": ["a", "b", "c"], "window": 2,
+                                     "targets": [{"name": "y"}]},
+                            "model": {**MODELS[family], **extra}})
+        est = classic.build_estimator(cfg)
+        return est, classic._fit(est, z, y, None, family)
+
+    leaf = 20 if family == "hist_gb" else 10
+    est, said = notes({} if family == "hist_gb" else {"min_samples_leaf": 10})
+    assert said == [f"{family}: no tree made a split on the 9 training windows (each leaf "
+                    f"needs model.min_samples_leaf = {leaf} windows): the model gives every "
+                    "window the same probabilities; lower model.min_samples_leaf or train "
+                    "on more windows"]
+    p = est.predict_proba(z)
+    np.testing.assert_allclose(p, p[:1].repeat(len(p), axis=0))
+    est, said = notes({"min_samples_leaf": 1})
+    assert said == []
+    assert np.ptp(est.predict_proba(z)[:, 1]) > 0
