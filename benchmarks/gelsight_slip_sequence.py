@@ -110,7 +110,16 @@ def wilson(k: int, n: int, z: float = Z95) -> list[float]:
 
 
 def write_labels(source: Path, out: Path) -> list[dict[str, Any]]:
-    """The trial-labels CSV of the lifts (trial = lift folder); returns its rows."""
+    """The trial-labels CSV of the lifts (trial = lift folder, named as ``tactile ingest``
+    names it: ``066_60_mm``, or ``object001__066_60_mm`` when objects share a folder name);
+    returns its rows. A line of a result file whose folder is not there is left out and
+    named on stderr."""
+    from tactile_cli.ingest.image_sequence import folder_trial_names, image_sequence_folders
+
+    folders = [f for obj in sorted(source.glob("object*")) if obj.is_dir()
+               for f in image_sequence_folders(obj)]
+    name_of = {f.resolve(): n for f, n in zip(folders, folder_trial_names(folders),
+                                              strict=True)}
     rows = []
     for dat in sorted(source.glob("object*_result.dat")):
         obj = dat.name.split("_")[0]
@@ -118,7 +127,12 @@ def write_labels(source: Path, out: Path) -> list[dict[str, Any]]:
             cells = line.split()
             if len(cells) < 7:
                 continue
-            rows.append({"trial": f"{cells[6]}_mm", "slipped": int(cells[1] in ("fail", "slip")),
+            folder = (source / obj / f"{cells[6]}_mm").resolve()
+            if folder not in name_of:
+                print(f"note: {dat.name}: lift {cells[6]} has no folder {obj}/{cells[6]}_mm; "
+                      "left out", file=sys.stderr)
+                continue
+            rows.append({"trial": name_of[folder], "slipped": int(cells[1] in ("fail", "slip")),
                          "outcome": cells[1], "object": obj, "position_mm": float(cells[0]),
                          "lift_order": int(cells[3])})
     with open(out, "w", newline="", encoding="utf-8") as f:

@@ -1,6 +1,8 @@
 """Image-sequence folders of visuotactile sensors (DIGIT, GelSight) into the tactile store.
 
-Layout read (one folder = one trial, trial name = folder name)::
+Layout read (one folder = one trial, trial name = folder name; when folder names repeat
+across the inputs, every trial is named by its path below their common folder, parts joined
+by ``__``: ``object001__066_60_mm``, :func:`folder_trial_names`)::
 
     press_01/
         reference.png          the no-contact frame (names below)
@@ -57,8 +59,9 @@ order, then its reference, then its ``timestamps.csv`` if any).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -123,10 +126,12 @@ class ImageFolder:
     labels_file: Path | None = None
     labels: tuple[tuple[str, str | int | float], ...] = ()
     split: str | None = None
+    #: the trial's name when it is not the folder's own (:func:`folder_trial_names`)
+    name: str | None = None
 
     @property
     def trial_name(self) -> str:
-        return self.folder.resolve().name
+        return self.name if self.name is not None else self.folder.resolve().name
 
 
 class ImageFolderOptions(FormatOptions):
@@ -508,8 +513,24 @@ def scan_inputs(inputs: Sequence[Path], options: ImageFolderOptions) -> list[Ima
     # a folder with neither frames nor sequence folders is scanned as it is, for its error
     trial_folders = [f for p in inputs for f in ((image_sequence_folders(p) or [p])
                                                  if p.is_dir() else [p])]
-    return [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz,
-                              reference_name=options.reference) for p in trial_folders]
+    scanned = [scan_image_folder(p, frame_rate_hz=options.frame_rate_hz,
+                                 reference_name=options.reference) for p in trial_folders]
+    names = folder_trial_names([f.folder for f in scanned])
+    return [f if f.trial_name == n else replace(f, name=n) for f, n in zip(scanned, names,
+                                                                           strict=True)]
+
+
+def folder_trial_names(folders: Sequence[Path]) -> list[str]:
+    """One trial name per frame folder: the folders' names, or, when two names are equal
+    (``object001/066_60_mm`` and ``object002/066_60_mm``, as lift sets keep one folder per
+    object), each folder's path below the folders' common folder, parts joined by ``__``
+    (``object001__066_60_mm``), so that a trial-label table can name each one."""
+    resolved = [f.resolve() for f in folders]
+    names = [f.name for f in resolved]
+    if len(set(names)) == len(names):
+        return names
+    common = Path(os.path.commonpath([f.parent for f in resolved]))
+    return ["__".join(f.relative_to(common).parts) for f in resolved]
 
 
 def assumed_rate_notes(folders: Sequence[ImageFolder]) -> list[str]:
@@ -655,6 +676,7 @@ __all__ = [
     "ImageFolderOptions",
     "assumed_rate_notes",
     "describe_image_folders",
+    "folder_trial_names",
     "has_image_files",
     "image_sequence_folders",
     "REFERENCE_STEMS",

@@ -159,3 +159,38 @@ def test_out_dir_carries_reference_scale_and_labels_json(tmp_path: Path) -> None
             assert np.array_equal(frames.reference, images[0]) and len(frames) == 4
             assert f.sensor(frames.sensor_name).attrs["px_per_mm"] == 12.5
             assert f.trial(name).labels["object"] == obj
+
+
+def test_folders_of_one_name_under_two_objects_are_two_named_trials(tmp_path: Path) -> None:
+    """Lift sets keep a folder per object whose lift folders repeat across objects
+    (``object001/066_60_mm``, ``object002/066_60_mm``): each is its own trial, named by its
+    path below the common folder, and a trial-label table reaches each one."""
+    first = _frames(tmp_path / "object001" / "066_60_mm", 3, size_hw=(24, 32), seed=1)
+    second = _frames(tmp_path / "object002" / "066_60_mm", 3, size_hw=(24, 32), seed=2)
+    _frames(tmp_path / "object002" / "067_00_mm", 3, size_hw=(24, 32), seed=3)
+    labels = tmp_path / "labels.csv"
+    labels.write_text("trial,slipped\nobject001__066_60_mm,1\nobject002__066_60_mm,0\n"
+                      "object002__067_00_mm,1\n", encoding="utf-8")
+    out = tmp_path / "out.h5"
+    code, output = _ingest(str(tmp_path / "object001"), str(tmp_path / "object002"),
+                           "--reference", "first", "--trial-labels", str(labels),
+                           "--out", str(out))
+    assert code == 0, output
+    with TactileFile(out) as f:
+        assert f.trial_names == ["object001__066_60_mm", "object002__066_60_mm",
+                                 "object002__067_00_mm"]
+        one, two = f.trial("object001__066_60_mm"), f.trial("object002__066_60_mm")
+        assert np.array_equal(one.frames()[2], first[2])
+        assert np.array_equal(two.frames()[2], second[2])
+        assert (one.labels["slipped"], two.labels["slipped"]) == (1, 0)
+
+
+def test_folders_of_distinct_names_keep_their_names(tmp_path: Path) -> None:
+    _frames(tmp_path / "object001" / "066_60_mm", 2, size_hw=(24, 32))
+    _frames(tmp_path / "object002" / "065_00_mm", 2, size_hw=(24, 32))
+    out = tmp_path / "out.h5"
+    code, output = _ingest(str(tmp_path / "object001"), str(tmp_path / "object002"),
+                           "--reference", "first", "--out", str(out))
+    assert code == 0, output
+    with TactileFile(out) as f:
+        assert f.trial_names == ["066_60_mm", "065_00_mm"]

@@ -519,3 +519,29 @@ def test_biotac_nan_velocity_columns_are_refused_when_selected(tmp_path):
     out = _ingest([trial], CONFIGS / "biotac_slide20.yaml", tmp_path / "ok.h5")
     with h5py.File(out) as h5:
         assert list(h5["trials"]) == ["mat1_1"]
+
+
+def test_biotac_mapping_keeps_a_session_whose_logger_repeats_a_stamp(tmp_path):
+    """A later session of the same set whose logger wrote one BioTac row twice at the same
+    stamp: the shipped mapping keeps the recording (`stamps: drop_repeats`) and counts what
+    it dropped, instead of refusing the whole folder."""
+    import shutil
+
+    root = shared_path("biotac_slide20")
+    folder = tmp_path / "session" / "mat1"
+    folder.mkdir(parents=True)
+    for suffix in ("bio", "cw", "cv"):
+        shutil.copy(root / "mat1" / f"mat1_1_{suffix}.csv", folder)
+    lines = (folder / "mat1_1_bio.csv").read_text().splitlines(keepends=True)
+    lines.insert(101, lines[100])  # data row 100 written twice
+    (folder / "mat1_1_bio.csv").write_text("".join(lines))
+    out = _ingest([tmp_path / "session"], CONFIGS / "biotac_slide20.yaml", tmp_path / "x.h5")
+    with h5py.File(out) as h5, h5py.File(
+            _ingest([root / "mat1" / "mat1_1_bio.csv"], CONFIGS / "biotac_slide20.yaml",
+                    tmp_path / "clean.h5")) as clean:
+        got, want = h5["trials/mat1_1/signals/biotac"], clean["trials/mat1_1/signals/biotac"]
+        np.testing.assert_array_equal(got["data"][()], want["data"][()])
+        assert got.attrs["stamps_repeated"] == 1 and got.attrs["stamps_dropped"] == 1
+        assert got.attrs["stamps_policy"] == "drop_repeats"
+        assert h5["trials/mat1_1/signals/pac/data"].shape == \
+            clean["trials/mat1_1/signals/pac/data"].shape
