@@ -67,6 +67,7 @@ from .data import (
     read_trials,
     resolve_channels,
     trial_groups,
+    windowless_note,
 )
 from .device import resolve_device
 from .drift import (
@@ -481,6 +482,8 @@ def evaluate_cv(
             raise InputError(f"held-out trial {missing} of fold {fold['fold']} is not in the "
                              "data", path=paths[0])
         ws = make_windows(held, run.config.data, run.heads, run.normalisation)
+        notes = [*notes, *(f"fold {fold['fold']}: {n}"
+                           for n in windowless_note(held, ws, run.config.data.window))]
         shifts.append(input_shift(held, run.config.data, run.normalisation,
                                   threshold_sd=shift_threshold_sd))
         inter.append(interleaving(held, run.info.get("recording_order")))

@@ -642,6 +642,21 @@ def _near_change(labels: np.ndarray, margin: int) -> np.ndarray:
     return (change[hi + 1] - change[lo + 1]) > 0
 
 
+def windowless_note(trials: Sequence[TrialSeries], ws: WindowSet, window: int) -> list[str]:
+    """One note naming the trials of ``trials`` that gave no window in ``ws`` (so no
+    decision and no score), or [] when every trial gave one: a trial shorter than the
+    window without ``pad``, or one without a labelled sample, is left out of every metric,
+    and a per-trial accuracy is then over fewer trials than the data hold."""
+    have = {ws.trials[i] for i in np.unique(ws.trial_index)} if len(ws) else set()
+    left = [t.key for t in trials if t.key not in have]
+    if not left:
+        return []
+    names = ", ".join(left[:3]) + (f" and {len(left) - 3} more" if len(left) > 3 else "")
+    return [f"{len(left)} of {len(trials)} trials give no window and are not scored "
+            f"({names}): shorter than the window of {window} samples (data.pad: none), or "
+            "without a labelled sample"]
+
+
 def make_windows(trials: Sequence[TrialSeries], data: DataConfig, heads: Sequence[HeadSpec],
                  norm: Normalisation) -> WindowSet:
     """Cut trials into windows with one target per head (see the module docstring)."""
@@ -787,6 +802,7 @@ __all__ = ["SPLITS", "Normalisation", "SplitAssignment", "TrialSeries",
            "WindowSet", "assign_splits", "center_scale", "check_heads_match", "class_weights",
            "data_files",
            "fit_normalisation", "make_windows", "per_sample_targets", "read_trials",
+           "windowless_note",
            "trial_samples",
            "regression_stats", "resolve_heads", "summary_features", "transform_samples",
            "window_ends"]

@@ -31,7 +31,14 @@ from ..store.origin import data_origin
 from ..store.provenance import current_command, utc_now
 from . import runs
 from .cv import evaluate_cv
-from .data import check_heads_match, data_files, make_windows, read_trials, trial_groups
+from .data import (
+    check_heads_match,
+    data_files,
+    make_windows,
+    read_trials,
+    trial_groups,
+    windowless_note,
+)
 from .device import resolve_device
 from .drift import SHIFT_THRESHOLD_SD, input_shift, interleaving
 from .inputs import checked_input, input_record
@@ -127,6 +134,7 @@ def evaluate(
     if len(ws) == 0:
         raise InputError(f"the data give no windows (window {cfg.data.window} samples); "
                          "are the trials shorter than the window?")
+    notes = [*notes, *windowless_note(trials, ws, cfg.data.window)]
     model = run.load_model()
     outputs, used = predict_on(model, ws, dev)
     grouped = trial_groups(trials, cfg.data)

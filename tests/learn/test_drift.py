@@ -181,3 +181,22 @@ def test_pooled_interleaving_sums_the_folds_and_is_unknown_when_one_is():
     assert [f["fold"] for f in pooled.folds] == [0, 1]
     unknown = pooled_interleaving([a, Interleaving(None, 2, reason="no order")], [0, 1])
     assert unknown.interleaved is None and unknown.reason == "no order"
+
+
+def test_trials_that_give_no_window_are_named_not_silently_unscored():
+    from tactile_cli.learn.data import make_windows, windowless_note
+
+    cfg = parse_config({**_CONFIG, "data": {**_CONFIG["data"], "window": 20, "stride": 20,
+                                            "pad": "none"}})
+    heads = [HeadSpec("material", "classification", "trial", 1.0, ("A", "B"))]
+    trials = [_series("long_A", np.ones((40, 2)), material="A"),
+              _series("short_B", np.ones((19, 2)), material="B"),
+              _series("exact_B", np.ones((20, 2)), material="B")]
+    norm = fit_normalisation(trials, ["a", "b"])
+    ws = make_windows(trials, cfg.data, heads, norm)
+    assert sorted(set(ws.trials[i] for i in ws.trial_index)) == ["f.h5/exact_B", "f.h5/long_A"]
+    assert windowless_note(trials, ws, 20) == [
+        "1 of 3 trials give no window and are not scored (f.h5/short_B): shorter than the "
+        "window of 20 samples (data.pad: none), or without a labelled sample"]
+    assert windowless_note(trials[:1] + trials[2:], make_windows(
+        trials[:1] + trials[2:], cfg.data, heads, norm), 20) == []
