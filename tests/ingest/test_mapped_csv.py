@@ -545,3 +545,33 @@ def test_biotac_mapping_keeps_a_session_whose_logger_repeats_a_stamp(tmp_path):
         assert got.attrs["stamps_policy"] == "drop_repeats"
         assert h5["trials/mat1_1/signals/pac/data"].shape == \
             clean["trials/mat1_1/signals/pac/data"].shape
+
+
+def test_xela_slip_mapping_keeps_a_trial_whose_clock_repeats_a_step(tmp_path):
+    """A later Xela trial whose robot clock writes one step time twice: the shipped mapping
+    keeps the trial (`stamps: drop_repeats`), dropping that step from every stream and its
+    slip labels alike, so samples and labels stay aligned."""
+    import shutil
+
+    trial = shared_path("xela_slip") / "data_sample_2022-02-22-08-10-01"
+    copy = tmp_path / "later" / trial.name
+    shutil.copytree(trial, copy)
+    state = (copy / "robot_state.csv").read_text().splitlines(keepends=True)
+    header = state[0].rstrip("\n").split(",")
+    col = header.index("time")
+    cells = state[51].rstrip("\n").split(",")  # data row 50 takes row 49's time
+    cells[col] = state[50].rstrip("\n").split(",")[col]
+    state[51] = ",".join(cells) + "\n"
+    (copy / "robot_state.csv").write_text("".join(state))
+    out = _ingest([tmp_path / "later"], CONFIGS / "xela_slip.yaml", tmp_path / "x.h5")
+    clean = _ingest([trial], CONFIGS / "xela_slip.yaml", tmp_path / "clean.h5")
+    with h5py.File(out) as h5, h5py.File(clean) as ref:
+        (name,) = list(h5["trials"])
+        for stream in ("sensor1", "sensor2", "robot", "marker"):
+            got, want = h5[f"trials/{name}/signals/{stream}"], ref[f"trials/{name}/signals/{stream}"]
+            np.testing.assert_array_equal(got["data"][()], np.delete(want["data"][()], 50, 0))
+            assert got.attrs["stamps_dropped"] == 1
+        got, want = h5[f"trials/{name}/signals/sensor1"], ref[f"trials/{name}/signals/sensor1"]
+        for label in ("slip", "fail"):
+            np.testing.assert_array_equal(got[f"sample_labels/{label}"][()],
+                                          np.delete(want[f"sample_labels/{label}"][()], 50))
