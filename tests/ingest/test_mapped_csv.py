@@ -568,7 +568,8 @@ def test_xela_slip_mapping_keeps_a_trial_whose_clock_repeats_a_step(tmp_path):
     with h5py.File(out) as h5, h5py.File(clean) as ref:
         (name,) = list(h5["trials"])
         for stream in ("sensor1", "sensor2", "robot", "marker"):
-            got, want = h5[f"trials/{name}/signals/{stream}"], ref[f"trials/{name}/signals/{stream}"]
+            where = f"trials/{name}/signals/{stream}"
+            got, want = h5[where], ref[where]
             np.testing.assert_array_equal(got["data"][()], np.delete(want["data"][()], 50, 0))
             assert got.attrs["stamps_dropped"] == 1
         got, want = h5[f"trials/{name}/signals/sensor1"], ref[f"trials/{name}/signals/sensor1"]

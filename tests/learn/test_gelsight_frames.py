@@ -64,3 +64,35 @@ def test_two_real_lifts_read_as_frame_sequences(tmp_path):
                       frames=data.frames)
     x = torch.from_numpy(np.stack([t.x for t in trials.values()]))
     assert net(x)["slipped"].shape == (2, 2)
+
+
+def test_benchmark_labels_name_lifts_as_ingest_does_when_objects_share_a_folder(tmp_path):
+    """The rest of the lift set repeats lift folders across objects (066_60_mm under two
+    objects): the labels then name each lift by object, as `tactile ingest` names the
+    trials, and a result line without its folder is left out, not a failed ingest."""
+    from PIL import Image
+
+    for obj in ("object001", "object003"):
+        for lift in ("066_60_mm", "067_00_mm"):
+            folder = tmp_path / obj / lift
+            folder.mkdir(parents=True)
+            Image.new("RGB", (8, 6)).save(folder / "gelsight_img_0.jpg")
+    (tmp_path / "object001_result.dat").write_text(
+        "66.6 fail 0 160 450 398 066_60 _s09_\n67 ok 0 930 1100 1027 067_00 _s09_\n")
+    (tmp_path / "object003_result.dat").write_text(
+        "66.6 success 0 10 450 398 066_60 _s01_\n68 slip 0 20 1100 1027 068_00 _s01_\n")
+    rows = _benchmark().write_labels(tmp_path, tmp_path / "labels.csv")
+    assert [(r["trial"], r["slipped"]) for r in rows] == [
+        ("object001__066_60_mm", 1), ("object001__067_00_mm", 0), ("object003__066_60_mm", 0)]
+    out = tmp_path / "lifts.h5"
+    result = CliRunner().invoke(app, [
+        "ingest", str(tmp_path / "object001"), str(tmp_path / "object003"), "--reference",
+        "first", "--trial-labels", str(tmp_path / "labels.csv"), "--out", str(out),
+        "--no-progress"])
+    assert result.exit_code == 0, result.output
+    from tactile_cli.store.trials import TactileFile
+
+    with TactileFile(out) as f:
+        got = {t: f.trial(t).labels.get("slipped") for t in f.trial_names}
+    assert got == {"object001__066_60_mm": 1, "object001__067_00_mm": 0,
+                   "object003__066_60_mm": 0, "object003__067_00_mm": None}
