@@ -165,13 +165,16 @@ def apply_changes(raw: dict[str, Any], changes: dict[str, dict[str, Any]]) -> di
     return raw
 
 
-def variant_config(name: str, scheme: str, epochs: int | None) -> Any:
+def variant_config(name: str, scheme: str, epochs: int | None, seed: int | None = None
+                   ) -> Any:
     changes = dict(VARIANTS[name])
     raw = yaml.safe_load(CONFIG.read_text())
     if "family" in changes.get("model", {}):  # another family: its own model section
         raw["model"] = dict(changes.pop("model"))
     raw = apply_changes(raw, changes)
     raw["data"]["split"] = SCHEMES[scheme][0]
+    if seed is not None:
+        raw["seed"] = seed
     if epochs is not None:
         raw["optim"]["epochs"] = epochs
     return parse_config(raw)
@@ -210,8 +213,9 @@ def intensity_decisions(data: Path) -> dict[str, bool]:
 
 
 def run_one(name: str, scheme: str, data: Path, tmp: Path, *, epochs: int | None,
-            truth: dict[str, int], intensity: dict[str, bool]) -> dict[str, Any]:
-    cfg = variant_config(name, scheme, epochs)
+            truth: dict[str, int], intensity: dict[str, bool], seed: int | None = None
+            ) -> dict[str, Any]:
+    cfg = variant_config(name, scheme, epochs, seed)
     k = SCHEMES[scheme][1]
     out = tmp / f"{name}_{scheme}"
     started = time.perf_counter()
@@ -255,6 +259,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--schemes", nargs="+", default=list(SCHEMES), choices=list(SCHEMES))
     ap.add_argument("--epochs", type=int, default=None, help="override optim.epochs")
+    ap.add_argument("--seed", type=int, default=None, help="override the config's seed")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "figures")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     args = ap.parse_args(argv)
@@ -281,7 +286,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{name}: {scheme} ({SCHEMES[scheme][1]} folds)", file=sys.stderr,
                       flush=True)
                 results.append(run_one(name, scheme, data, tmp, epochs=args.epochs,
-                                       truth=truth, intensity=intensity))
+                                       truth=truth, intensity=intensity, seed=args.seed))
         data_sha = sha256_of(data)
     by_object = [r for r in results if r["scheme"] == "object"]
     reached = sorted((r for r in by_object if r["model"]["accuracy"] >= PUBLISHED),
@@ -297,6 +302,7 @@ def main(argv: list[str] | None = None) -> int:
                  "lifts": len(rows), "slipped": sum(r["slipped"] for r in rows),
                  "objects": sorted({r["object"] for r in rows})},
         "config": str(CONFIG.relative_to(ROOT)), "epochs_override": args.epochs,
+        "seed_override": args.seed,
         "target": {"per_lift_accuracy": PUBLISHED, "published": "Li et al., ICRA 2018, "
                    "88.03 % (CNN-LSTM on GelSight and camera images, whole set)"},
         "smallest_reaching_target_by_object": reached[0]["variant"] if reached else None,
