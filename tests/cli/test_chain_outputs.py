@@ -179,7 +179,8 @@ def test_a_live_stream_of_twenty_megabytes_on_one_line_is_refused_without_readin
     with open(stream, "w") as f:
         f.write("0.1\n" + "9" * 20_000_000 + "\n")
     result = runner.invoke(app, ["detect-contact", str(stream), "--follow"])
-    _one_error_line(result, "line 2 is longer than 1024 characters")
+    line = _one_error_line(result)
+    assert "line 2 is longer than 1024 characters" in line
 
 
 def test_follow_input_refuses_an_infinite_rate_in_the_library(tmp_path):
@@ -208,14 +209,15 @@ def _deep(path: Path, depth: int = 200) -> Path:
 def test_deeply_nested_configs_are_one_line(work: Path, args):
     deep = _deep(work / "deep.yaml")
     result = runner.invoke(app, [a.format(w=work, deep=deep) for a in args])
-    _one_error_line(result, "nested")
+    assert "nested" in _one_error_line(result)
 
 
 def test_a_scene_json_nested_deeply_is_one_line(work: Path):
     scene = work / "scene"
     (scene / "scene.json").write_text('{"optics": ' + "[" * 5_000 + "]" * 5_000 + "}")
     result = runner.invoke(app, ["monitor", str(scene)])
-    _one_error_line(result, "scene.json", "nested")
+    line = _one_error_line(result, "scene.json")
+    assert "nested" in line
 
 
 @pytest.mark.parametrize(("args", "words"), [
