@@ -37,6 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tactile_cli._version import __version__  # noqa: E402
+from tactile_cli.errors import InputError  # noqa: E402
 from tactile_cli.learn.config import load_config  # noqa: E402
 from tactile_cli.learn.cv import evaluate_cv, parse_cv  # noqa: E402
 from tactile_cli.learn.pipeline import train_run  # noqa: E402
@@ -111,15 +112,19 @@ def main(argv: list[str] | None = None) -> int:
     if len(set(args.seeds)) != len(args.seeds):
         print("error: --seeds: a seed is given twice", file=sys.stderr)
         return 2
-    k = parse_cv(args.cv)
-    split = load_config(args.config).data.split
-    with tempfile.TemporaryDirectory(prefix="seed_spread_") as tmp:
-        work = args.work if args.work is not None else Path(tmp)
-        work.mkdir(parents=True, exist_ok=True)
-        rows = []
-        for seed in args.seeds:
-            print(f"seed {seed}", file=sys.stderr, flush=True)
-            rows.append(one_seed(args.config, args.data, k, seed, work))
+    try:  # a bad config, data or --cv: one line naming it, as `tactile train` says it
+        k = parse_cv(args.cv)
+        split = load_config(args.config).data.split
+        with tempfile.TemporaryDirectory(prefix="seed_spread_") as tmp:
+            work = args.work if args.work is not None else Path(tmp)
+            work.mkdir(parents=True, exist_ok=True)
+            rows = []
+            for seed in args.seeds:
+                print(f"seed {seed}", file=sys.stderr, flush=True)
+                rows.append(one_seed(args.config, args.data, k, seed, work))
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     record = {
         "format": "tactile-seed-spread", "format_version": 1, "tool_version": __version__,
         "created_utc": utc_now(),

@@ -2,23 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.conftest import load_benchmark
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("biotac_inputs",
-                                                  ROOT / "benchmarks/biotac_inputs.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["biotac_inputs"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("biotac_inputs")
 
 
 def _fold(trials, t_s, y, p):

@@ -6,8 +6,6 @@ network (the figures: benchmarks/RESULTS.md, "Real data: GelSight lifts")."""
 from __future__ import annotations
 
 import csv
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,19 +18,13 @@ from tactile_cli.learn.config import load_config
 from tactile_cli.learn.data import read_trials, resolve_channels
 from tactile_cli.learn.heads import HeadSpec
 from tactile_cli.learn.models import build_model
-from tests.conftest import shared_path
+from tests.conftest import load_benchmark, shared_path
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def _benchmark():
-    path = ROOT / "benchmarks" / "gelsight_slip_sequence.py"
-    spec = importlib.util.spec_from_file_location("gelsight_slip_sequence", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["gelsight_slip_sequence"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("gelsight_slip_sequence")
 
 
 @pytest.mark.slow

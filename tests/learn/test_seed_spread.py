@@ -3,26 +3,17 @@ reported (the GelSight lifts moved 20 points with the seed; RESULTS.md, "Seeds")
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
-from .conftest import tiny_config
+from tests.conftest import load_benchmark
 
-ROOT = Path(__file__).resolve().parents[2]
+from .conftest import tiny_config
 
 
 def _script():
-    path = ROOT / "benchmarks" / "seed_spread.py"
-    spec = importlib.util.spec_from_file_location("seed_spread", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["seed_spread"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("seed_spread")
 
 
 def test_each_seed_is_a_run_and_the_summary_is_their_spread(action_file, tmp_path, capsys):
@@ -56,3 +47,11 @@ def test_a_seed_given_twice_is_refused(action_file, tmp_path, capsys):
     assert _script().main([str(config), "--data", str(action_file), "--seeds", "1",
                            "1"]) == 2
     assert capsys.readouterr().err.strip() == "error: --seeds: a seed is given twice"
+
+
+def test_a_bad_cv_is_one_line(action_file, tmp_path, capsys):
+    config = tmp_path / "tiny.yaml"
+    config.write_text(tiny_config().as_yaml())
+    assert _script().main([str(config), "--data", str(action_file), "--cv", "1"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "error: `k` must be an integer >= 2 or loto, got '1'")

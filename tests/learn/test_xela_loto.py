@@ -2,25 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import shared_path
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.conftest import load_benchmark, shared_path
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("xela_loto", ROOT / "benchmarks/xela_loto.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["xela_loto"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("xela_loto")
 
 
 def test_wilson_interval_known_value() -> None:
