@@ -158,6 +158,8 @@ COMMANDS: tuple[tuple[str, str, str, bool], ...] = (
      "DST Poisson solve (paper 002, Fig. 2).", False),
     ("slip-signal", "slip_signal", "Slip signal on a tactile mesh (eq. 10), adaptive threshold "
      "and slip decision per trial (paper 002).", False),
+    ("slip-imprint", "slip_imprint", "Whether the grasp's contact imprint survived the lift: "
+     "slip per trial, threshold learned by leave-one-object-out CV.", False),
     ("normal-labels", "normal_labels", "Calibration pixel table of the normal MLP from "
      "ball-bearing presses: contact circles, sphere normals (paper 002, eqs. 5-8).", False),
 )

@@ -578,9 +578,10 @@ def harmless_for(kind: str, role: str, mutation: str, command: str) -> bool:
     # features --stream accel reads the accel stream alone, never the velocity stream
     if kind == "accel" and command == "features" and ".velocity." in mutation:
         return True
-    # slip-signal and monitor take frame times from the frames' t_s and the geometry from
-    # the images: the frames sensor's kind and sample rate are never read
-    return kind in ("visuo", "press") and command in ("slip-signal", "monitor") and \
+    # slip-signal, slip-imprint and monitor take frame times from the frames' t_s and the
+    # geometry from the images: the frames sensor's kind and sample rate are never read
+    return kind in ("visuo", "press") and command in ("slip-signal", "slip-imprint",
+                                                      "monitor") and \
         role == "sensor" and mutation.startswith(("del-sensor-kind", "sensor-"))
 
 
@@ -609,7 +610,8 @@ def _nothing_lost(add, case, base: Path, REFUSE, EITHER) -> None:
              "--overwrite"]],
         h5 / "press.h5": [
             ["heightmap", "{IN}", "--model", model, "--out", "{IN}", "--overwrite"],
-            ["monitor", "{IN}", "--plot", "{IN}", "--overwrite"]],
+            ["monitor", "{IN}", "--plot", "{IN}", "--overwrite"],
+            ["slip-imprint", "{IN}", "--threshold", "0.05", "--plot", "{IN}", "--overwrite"]],
         h5 / "calib.h5": [["normal-labels", "{IN}", "--out", "{IN}", "--overwrite"]],
         h5 / "heightmap.h5": [["slip-signal", "{IN}", "--plot", "{IN}"]],
         h5 / "prepared.h5": [["accel-prepare", "{IN}", "--out", "{IN}", "--overwrite"]],
@@ -632,7 +634,7 @@ def _nothing_lost(add, case, base: Path, REFUSE, EITHER) -> None:
 
 
 #: the chain commands that take --no-progress
-_PROGRESS = {"slip-interface", "features", "heightmap", "monitor", "normal-labels",
+_PROGRESS = {"slip-interface", "features", "heightmap", "monitor", "normal-labels", "slip-imprint",
              "slip-signal", "accel-prepare", "simulate"}
 
 

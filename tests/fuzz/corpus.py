@@ -567,7 +567,7 @@ def _yaml_set(p: Path, dotted: str, value, raw: bool = False) -> None:
 #: chain commands that read every trial's stream, frames, annotations of the file
 _SIGNAL_READERS = {"accel-prepare", "features", "detect-delay", "slip-interface",
                    "detect-contact", "slip-signal"}
-_FRAME_READERS = {"normal-labels", "heightmap", "slip-signal", "monitor"}
+_FRAME_READERS = {"normal-labels", "heightmap", "slip-signal", "slip-imprint", "monitor"}
 # detect-contact scores contact trials (the first is one) by their label contact_s and
 # reads annotations of touch trials only
 _ANNOTATION_READERS = {"slip-interface"}
@@ -656,7 +656,8 @@ H5_COMMANDS["taxel"] += [
 H5_COMMANDS["visuo"] += [
     ("slip-signal", ["slip-signal", "{IN}", "--source", "intensity", "--n-static", "3",
                      "--no-progress"]),
-    ("monitor", ["monitor", "{IN}", "--n-static", "3", "--no-progress"])]
+    ("monitor", ["monitor", "{IN}", "--n-static", "3", "--no-progress"]),
+    ("slip-imprint", ["slip-imprint", "{IN}", "--threshold", "0.05", "--no-progress"])]
 _CHECK = [("info", ["info", "{IN}"]), ("validate", ["validate", "{IN}"])]
 H5_COMMANDS.update({
     "prepared": [*_CHECK, ("detect-delay", [
