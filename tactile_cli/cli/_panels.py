@@ -52,6 +52,7 @@ PANELS: dict[str, list[tuple[str, str]]] = {
         ("normal-labels", "tactile normal-labels calib.h5 --out pixels.h5 --plot calibration"),
         ("heightmap", "tactile heightmap trials.h5 --model runs/normals --out heights.h5"),
         ("slip-signal", "tactile slip-signal trials.h5 --source intensity --plot slip"),
+        ("slip-imprint", "tactile slip-imprint lifts.h5 --plot imprint.png"),
         ("monitor", "tactile monitor avoid --plot monitor"),
     ],
     "Active vibration (paper 003)": [
