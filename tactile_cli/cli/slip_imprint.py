@@ -29,7 +29,8 @@ def slip_imprint_command(
         metavar="COLSxROWS")] = "32x24",
     grasp_part: Annotated[float, typer.Option(
         "--grasp-part", help="Share of each trial's frames within which the grasp is "
-        "complete; its strongest imprint is the grasp frame.", metavar="SHARE")] = 2 / 3,
+        "complete; its strongest imprint is the grasp frame.", metavar="SHARE",
+        show_default="2/3")] = 2 / 3,
     threshold: Annotated[str, typer.Option(
         "--threshold", help="Imprint change 1 - r above which a trial slipped, or auto: "
         "learned from the labelled trials by leave-one-object-out CV and reported with its "
