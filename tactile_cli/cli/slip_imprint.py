@@ -16,7 +16,8 @@ from .progress import ProgressOption, RichProgress
 
 FLAGS: dict[str, Flag] = {
     "mesh": "--mesh", "grasp_part": "--grasp-part", "threshold": "--threshold",
-    "label": "--label", "trials": "--trial", "plot": "--plot", "overwrite": "--overwrite",
+    "label": "--label", "baseline": "--baseline", "trials": "--trial", "plot": "--plot",
+    "overwrite": "--overwrite",
 }
 
 
@@ -38,6 +39,10 @@ def slip_imprint_command(
     label: Annotated[str, typer.Option(
         "--label", help="Trial label saying slipped (slip, fail, 1, ...) or held (no_slip, "
         "ok, 0, ...).", metavar="LABEL")] = "slip",
+    baseline: Annotated[str, typer.Option(
+        "--baseline", help="Maps relative to: first (the trial's first frame, before "
+        "contact; robust to a reference frame taken at another time) or reference (the "
+        "stored reference frame as it is).", metavar="first|reference")] = "first",
     trial: Annotated[list[str] | None, typer.Option(
         "--trial", "-t", help="Trial; repeatable (default: every trial).", metavar="TRIAL",
         show_default=False)] = None,
@@ -69,7 +74,8 @@ def slip_imprint_command(
                 value = text
         with RichProgress(enabled=progress) as bar:
             return slip_imprint_file(file, mesh=parse_mesh(mesh), grasp_part=grasp_part,
-                                     threshold=value, label=label, trials=trial,
+                                     threshold=value, label=label, baseline=baseline,
+                                     trials=trial,
                                      progress=bar, plot=plot, overwrite=overwrite)
 
     print_result(run_guarded(body, flags=FLAGS), as_json=as_json,

@@ -16,7 +16,11 @@ slides along the gel or fades as the object leaves it. This module measures that
   trial's frames; the retention ``r_t`` is the Pearson correlation over the mesh between
   frame ``g``'s map and frame ``t``'s (1: the same imprint, deeper or shallower; lower: it
   moved or changed shape); the trial's imprint change is ``1 - r`` at its last frame.
-  Dimensionless, 0 to 2.
+  Dimensionless, 0 to 2. The maps are taken relative to the trial's first map (``baseline
+  'first'``): a reference frame from another time (the gel or the light moved between
+  recordings) otherwise adds one pattern to every map, which the correlation follows (on
+  the real lifts, a reference from the next lift of the same object: 17 of 20 right from
+  the reference as given, 20 of 20 from the first frame).
 - :func:`best_threshold`: the change threshold that best separates labelled slipped from
   held trials (largest detection rate minus false-alarm rate; among ties, the middle one).
   A trial whose change is *above* the threshold slipped.
@@ -57,6 +61,8 @@ DEFAULT_MESH = (32, 24)
 #: Share of a trial's frames within which the grasp is complete (the grasp frame is the
 #: strongest imprint among them).
 DEFAULT_GRASP_PART = 2.0 / 3.0
+#: what the maps are taken relative to (:func:`imprint_change`)
+BASELINES = ("first", "reference")
 #: ``threshold`` value that learns the threshold from labelled trials
 THRESHOLD_AUTO = "auto"
 #: trial-label values read as slipped / held
@@ -92,14 +98,23 @@ class ImprintChange:
 
 
 def imprint_change(maps: np.ndarray, *, mesh: tuple[int, int] = DEFAULT_MESH,
-                   grasp_part: float = DEFAULT_GRASP_PART) -> ImprintChange:
+                   grasp_part: float = DEFAULT_GRASP_PART,
+                   baseline: str = "first") -> ImprintChange:
     """The imprint change of one trial's (n_frames, H, W) maps (module docstring).
-    ValueError when there is no frame after the grasp frame, ``grasp_part`` is outside
-    (0, 1), or the grasp frame holds no imprint (a constant map)."""
+    ``baseline``: ``first`` takes every map relative to the trial's first map (a lift's
+    first frame is before contact; a reference frame taken at another time adds its own
+    pattern to every map, which this removes; with ``--reference first`` the first map is
+    zero and nothing changes), ``reference``: the maps as given. ValueError when there is
+    no frame after the grasp frame, ``grasp_part`` is outside (0, 1), or the grasp frame
+    holds no imprint (a constant map)."""
+    if baseline not in BASELINES:
+        raise ValueError(f"`baseline` (={baseline!r}) must be one of {', '.join(BASELINES)}")
     if not (0.0 < grasp_part < 1.0):
         raise ValueError(f"`grasp_part` (={grasp_part}) must be between 0 and 1 (the share "
                          "of the frames within which the grasp is complete)")
     cells = mesh_means(maps, mesh)
+    if baseline == "first":
+        cells = cells - cells[0]
     n = cells.shape[0]
     k = int(np.ceil(grasp_part * n))
     if n < 2 or k >= n:
@@ -298,6 +313,7 @@ class ImprintFileResult:
     label: str
     threshold: float
     trials: list[TrialImprint]
+    baseline: str = "first"
     threshold_cv: ThresholdCV | None = None
     plot: str | None = None
     warnings: list[str] = field(default_factory=list)
@@ -314,6 +330,7 @@ class ImprintFileResult:
         return {
             "file": self.path, "source": "intensity",
             "mesh": f"{self.mesh[0]}x{self.mesh[1]}", "grasp_part": self.grasp_part,
+            "baseline": self.baseline,
             "label": self.label,
             "threshold": THRESHOLD_AUTO if self.threshold_cv else self.threshold,
             "threshold_used": self.threshold,
@@ -363,6 +380,7 @@ class ImprintFileResult:
 def slip_imprint_file(path: str | os.PathLike[str], *, mesh: tuple[int, int] = DEFAULT_MESH,
                       grasp_part: float = DEFAULT_GRASP_PART,
                       threshold: float | str = THRESHOLD_AUTO, label: str = "slip",
+                      baseline: str = "first",
                       trials: Sequence[str] | None = None, progress: Progress | None = None,
                       plot: str | os.PathLike[str] | None = None,
                       overwrite: bool = False) -> ImprintFileResult:
@@ -384,6 +402,8 @@ def slip_imprint_file(path: str | os.PathLike[str], *, mesh: tuple[int, int] = D
     if not (0.0 < grasp_part < 1.0):
         raise InputError(f"`grasp_part` (={grasp_part}) must be between 0 and 1 (the share "
                          "of the frames within which the grasp is complete)")
+    if baseline not in BASELINES:
+        raise InputError(f"`baseline` (={baseline!r}) must be one of {', '.join(BASELINES)}")
     if plot is not None:
         from ..input_guard import check_outputs
 
@@ -403,7 +423,8 @@ def slip_imprint_file(path: str | os.PathLike[str], *, mesh: tuple[int, int] = D
             maps, t_s = trial_maps(t, "intensity", None)
             t_s = check_frame_times(t_s, t)
             try:
-                im = imprint_change(maps, mesh=mesh, grasp_part=grasp_part)
+                im = imprint_change(maps, mesh=mesh, grasp_part=grasp_part,
+                                    baseline=baseline)
             except ValueError as exc:
                 raise InputError(f"trial {t.name!r}: {exc}", path=tf.path,
                                  where=f"/trials/{t.name}") from None
@@ -430,7 +451,7 @@ def slip_imprint_file(path: str | os.PathLike[str], *, mesh: tuple[int, int] = D
     out = [TrialImprint(name, obj, slipped, im, t_s, im.change > used)
            for name, obj, slipped, im, t_s in found]
     result = ImprintFileResult(str(path), (int(mesh[0]), int(mesh[1])), float(grasp_part),
-                               label, used, out, cv)
+                               label, used, out, baseline=baseline, threshold_cv=cv)
     if plot is not None:
         _plot(result, plot)
         result.plot = str(plot)
@@ -468,7 +489,7 @@ def _plot(result: ImprintFileResult, out: str) -> None:
                 meta={"Source": result.path, "Software": "tactile slip-imprint"})
 
 
-__all__ = ["DEFAULT_GRASP_PART", "DEFAULT_MESH", "HELD_VALUES", "SLIP_VALUES",
+__all__ = ["BASELINES", "DEFAULT_GRASP_PART", "DEFAULT_MESH", "HELD_VALUES", "SLIP_VALUES",
            "THRESHOLD_AUTO", "ImprintChange", "ImprintFileResult", "ThresholdCV",
            "ThresholdChoice", "ThresholdFold", "TrialImprint", "best_threshold",
            "imprint_change", "mesh_means", "read_slipped", "slip_imprint_file",

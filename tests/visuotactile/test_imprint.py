@@ -90,6 +90,21 @@ def test_a_held_imprint_is_kept_and_a_sliding_or_fading_one_is_not() -> None:
         imprint_change(np.zeros((6, 12, 16)), mesh=(16, 12))
 
 
+def test_a_reference_from_another_time_is_removed_by_the_first_frame_baseline() -> None:
+    """A reference frame taken at another time adds one pattern to every map; taken
+    relative to the first (no-contact) frame, the change is the same as without it."""
+    pattern = sphere_cap(SHAPE, (12.0, 12.0), 3.0, 0.6)  # an old dent in the reference
+    for kind in ("held", "slide"):
+        clean = imprint_change(_lift_heights(kind), mesh=(16, 12)).change
+        drifted = _lift_heights(kind) + pattern
+        assert imprint_change(drifted, mesh=(16, 12)).change == pytest.approx(clean)
+        as_given = imprint_change(drifted, mesh=(16, 12), baseline="reference").change
+        if kind == "slide":  # the shared pattern props up the correlation: a slip hidden
+            assert as_given < 0.5 * clean
+    with pytest.raises(ValueError, match="`baseline`"):
+        imprint_change(_lift_heights("held"), baseline="last")
+
+
 def test_best_threshold_sits_in_the_gap_and_cv_scores_each_group_held_out() -> None:
     changes = [0.001, 0.004, 0.02, 0.08, 0.3, 0.002, 0.006, 0.06, 0.2]
     slipped = [False, False, False, True, True, False, False, True, True]
@@ -137,6 +152,7 @@ def test_slip_imprint_decides_held_out_objects_and_reports_json(tmp_path: Path) 
     (["--label", "object"], "has label object='obj_a'; expected one of"),
     (["--label", "missing"], "--threshold auto needs labelled trials of both classes"),
     (["--mesh", "9000x2"], "the mesh 9000x2 does not fit maps of 64x48 px"),
+    (["--baseline", "median"], "--baseline (='median') must be one of first, reference"),
 ])
 def test_bad_settings_are_one_line_errors(tmp_path: Path, args: list[str],
                                           message: str) -> None:
