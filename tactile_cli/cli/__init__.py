@@ -150,6 +150,8 @@ COMMANDS: tuple[tuple[str, str, str, bool], ...] = (
      "force, offline or on a live stream (paper 003).", False),
     ("sweep", "sweep", "Train and evaluate a grid of model x window x channel set on Dask: one "
      "table, Fig. 8 and the speed-accuracy chart.", False),
+    ("seed-spread", "seed_spread", "One config trained and evaluated at several seeds: each "
+     "seed's held-out figures, their mean, SD and spread.", True),
     ("report", "report", "One self-contained HTML page of runs, comparison and data files.",
      True),
     ("monitor", "monitor", "Replay visuotactile trials through the slip-avoidance monitor: "

@@ -27,6 +27,8 @@ PANELS: dict[str, list[tuple[str, str]]] = {
         ("perturb", "tactile perturb runs/lstm runs/mlp --data scene_test.h5 --out perturb"),
         ("sweep", "tactile sweep configs/sweep_vibro.yaml --data prepared0.h5 --eval-data "
                   "prepared1.h5 --out sweep"),
+        ("seed-spread", "tactile seed-spread configs/train_mlp_actions.yaml --data synth.h5 "
+                        "--cv 5 --seeds 0-4 --out spread"),
         ("export", "tactile export runs/lstm --out lstm.onnx"),
         ("report", "tactile report runs/lstm runs/mlp --data scene_test.h5 --out report"),
     ],

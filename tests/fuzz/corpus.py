@@ -608,6 +608,10 @@ H5_READERS = {
     **_chain_readers(),
 }
 
+#: damaged training configs that `seed-spread` is also run on (`train` gets every one)
+SPREAD_MUTATIONS = ("yaml-syntax", "yaml-empty", "yaml-model.family=transformer",
+                    "yaml-optim.lr=.nan", "yaml-version=99", "yaml-data.stream=nope")
+
 H5_COMMANDS = {
     "events": [
         ("info", ["info", "{IN}"]),
@@ -942,6 +946,8 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
     cfg = base / "cfg"
     train_argv = ["train", "{IN}", "--data", "{BASE}/h5/counts.h5", "--out", "{OUT}/run",
                   "--no-progress"]
+    spread_argv = ["seed-spread", "{IN}", "--data", "{BASE}/h5/counts.h5", "--out",
+                   "{OUT}/spread", "--cv", "2", "--seeds", "0,1", "--no-progress"]
     for mutation, apply in _yaml_mutations([
             ("data.window", "1000000000000"), ("data.window", "0"), ("data.stride", "-1"),
             ("model.hidden", "[1000000000000]"), ("optim.threads", "1000000"),
@@ -952,6 +958,8 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
             ("data.targets", "[]")]):
         d = add("train-config", cfg / "train.yaml", "train.yaml", mutation, "config", apply)
         case(d, "train", train_argv, REFUSE)
+        if mutation in SPREAD_MUTATIONS:  # seed-spread reads the same config
+            case(d, "seed-spread", spread_argv, REFUSE)
     for mutation, apply in _yaml_mutations([
             ("output.resolution", "1000000000000"), ("output.resolution", "-5"),
             ("input.range", "[5, 1]"), ("input.terms.small.params", "[4, 3, 2, 1]"),

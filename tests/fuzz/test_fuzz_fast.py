@@ -35,7 +35,8 @@ RATE_PERCENT = {"info": 3, "validate": 4, "plot": 3, "grade": 5, "train": 3, "ev
                 # the sensor chains (tests/fuzz/chains.py): few, their runs are slower
                 "accel-prepare": 2, "detect-delay": 1, "features": 1, "slip-interface": 1,
                 "vibro-model": 5, "detect-contact": 2, "normal-labels": 3, "heightmap": 2,
-                "slip-signal": 3, "monitor": 1, "simulate": 2, "export": 4, "sweep": 5}
+                "slip-signal": 3, "monitor": 1, "simulate": 2, "export": 4, "sweep": 5,
+                "seed-spread": 20}
 #: kinds run for every command they have cases of (one case per command and kind, chosen by
 #: a hash of the case id; `make fuzz` runs them all): each case is a different command or
 #: output option, refused before any work

@@ -46,7 +46,7 @@ def test_a_seed_given_twice_is_refused(action_file, tmp_path, capsys):
     config.write_text(tiny_config().as_yaml())
     assert _script().main([str(config), "--data", str(action_file), "--seeds", "1",
                            "1"]) == 2
-    assert capsys.readouterr().err.strip() == "error: --seeds: a seed is given twice"
+    assert capsys.readouterr().err.strip() == "error: `seeds` gives seed 1 twice"
 
 
 def test_a_bad_cv_is_one_line(action_file, tmp_path, capsys):

@@ -1,0 +1,161 @@
+"""`tactile seed-spread`: one config trained and evaluated at several seeds, each seed a run
+folder whose figures are that seed's alone, the summary their spread, a stopped spread
+resumed, another spread in the folder refused (:mod:`tactile_cli.learn.seed_spread`)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from tactile_cli.cli import app
+from tactile_cli.errors import InputError
+from tactile_cli.learn.seed_spread import parse_seeds
+
+from .conftest import tiny_config
+
+runner = CliRunner()
+
+
+def _config(tmp_path, **split):
+    path = tmp_path / "tiny.yaml"
+    path.write_text(tiny_config(data={"split": {"val_fraction": 0.0, **split}},
+                                optim={"epochs": 2}).as_yaml())
+    return path
+
+
+def _spread(*args, workers=0):
+    return runner.invoke(app, ["seed-spread", *map(str, args), "--workers", str(workers)])
+
+
+@pytest.fixture(scope="module")
+def grouped_spread(action_file, tmp_path_factory):
+    root = tmp_path_factory.mktemp("seed_spread")
+    config = _config(root, mode="group", by="force_level")
+    out = root / "spread"
+    res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out,
+                  "--json")
+    assert res.exit_code == 0, res.output
+    return config, out, json.loads(res.stdout)
+
+
+def test_each_seed_is_the_run_that_train_and_evaluate_make(grouped_spread, action_file,
+                                                           tmp_path):
+    config, out, record = grouped_spread
+    assert [r["seed"] for r in record["by_seed"]] == [0, 2]
+    assert record["split_depends_on_seed"] is False and record["notes"] == [
+        "2 seed(s): too few for an SD to mean much; give 5 or more"]
+    # seed 2 by hand: the same figures
+    run = tmp_path / "by_hand"
+    assert runner.invoke(app, ["train", str(config), "--data", str(action_file), "--cv", "2",
+                               "--seed", "2", "--out", str(run)]).exit_code == 0
+    res = runner.invoke(app, ["evaluate", str(run), "--no-latency", "--json"])
+    assert res.exit_code == 0, res.output
+    by_hand = json.loads(res.stdout)
+    head = by_hand["heads"][by_hand["primary_head"]]
+    row = record["by_seed"][1]
+    assert row["window_accuracy"] == head["accuracy"]
+    assert row["window_macro_f1"] == head["macro_f1"]
+    assert row["n_windows"] == by_hand["n_windows"] and row["n_trials"] == by_hand["n_trials"]
+    acc = [r["window_accuracy"] for r in record["by_seed"]]
+    summary = record["summary"]["window_accuracy"]
+    assert (summary["min"], summary["max"]) == (min(acc), max(acc))
+    assert summary["mean"] == pytest.approx(sum(acc) / 2)
+    assert summary["spread"] == pytest.approx(max(acc) - min(acc))
+    # provenance and the written outputs
+    assert record["config_sha256"] and record["data"][0]["sha256"] and record["command"]
+    assert record["tool_version"] and record["cv"] == 2
+    assert json.loads((out / "seed_spread.json").read_text())["by_seed"] == record["by_seed"]
+    assert "| spread |" in (out / "seed_spread.md").read_text()
+    assert (out / "seed_spread.png").read_bytes()[:4] == b"\x89PNG"
+    assert (out / "seed_0" / "run.json").is_file()
+
+
+def test_a_stopped_spread_resumes_and_a_finished_one_is_kept(grouped_spread, action_file,
+                                                             tmp_path):
+    config, out, record = grouped_spread
+    args = (config, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out, "--json")
+    res = _spread(*args)
+    assert res.exit_code == 2
+    assert res.output.strip().endswith("holds a finished seed spread; pass --overwrite to run "
+                                       "it again")
+    # stopped after seed 0: the record and seed 2's evaluation missing
+    (out / "seed_spread.json").unlink()
+    for path in sorted((out / "seed_2" / "eval").rglob("*"), reverse=True):
+        path.rmdir() if path.is_dir() else path.unlink()
+    res = _spread(*args)
+    assert res.exit_code == 0, res.output
+    again = json.loads(res.stdout)
+    assert [r["resumed"] for r in again["by_seed"]] == [True, True]
+    for a, b in zip(again["by_seed"], record["by_seed"], strict=True):
+        assert a["window_accuracy"] == b["window_accuracy"]
+    # another config in the same folder
+    other = tmp_path / "other.yaml"
+    other.write_text(config.read_text().replace("hidden: 16", "hidden: 8"))
+    res = _spread(other, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out)
+    assert res.exit_code == 2
+    assert "holds a seed spread of another config, data or settings; pass --overwrite" in (
+        res.output)
+
+
+def test_without_cv_each_seed_is_scored_on_the_eval_data(action_file, heldout_file, tmp_path):
+    config = _config(tmp_path, mode="random")
+    res = _spread(config, "--data", action_file, "--eval-data", heldout_file, "--seeds", "1",
+                  "--out", tmp_path / "s", "--json", "--no-plot")
+    assert res.exit_code == 0, res.output
+    record = json.loads(res.stdout)
+    assert record["cv"] is None and record["eval_data"][0]["path"] == str(heldout_file)
+    assert record["by_seed"][0]["n_trials"] > 0
+    assert not (tmp_path / "s" / "seed_spread.png").exists()
+    res = _spread(config, "--data", action_file, "--eval-data", heldout_file, "--cv", "2",
+                  "--out", tmp_path / "t")
+    assert res.exit_code == 2 and "--eval-data FILE is for a spread without --cv" in res.output
+    assert not (tmp_path / "t").exists()
+
+
+def test_seeds_side_by_side_give_the_same_figures(action_file, tmp_path):
+    """Two local worker processes against one after another here: the same bits, and a
+    random split, drawn from the seed, named in the notes."""
+    config = _config(tmp_path, mode="random")
+    records = []
+    for workers in (0, 2):
+        res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "0-2", "--out",
+                      tmp_path / f"w{workers}", "--json", "--no-plot", workers=workers)
+        assert res.exit_code == 0, res.output
+        records.append(json.loads(res.stdout))
+    assert records[0]["split_depends_on_seed"] is True and records[0]["seeds"] == [0, 1, 2]
+    assert any("folds are drawn from the seed too" in n for n in records[0]["notes"])
+    keys = ("seed", "window_accuracy", "window_macro_f1", "n_windows", "folds")
+    assert [[r[k] for k in keys] for r in records[0]["by_seed"]] == [
+        [r[k] for k in keys] for r in records[1]["by_seed"]]
+    assert records[0]["summary"] == records[1]["summary"]
+
+
+def test_a_seed_that_fails_is_one_line_and_leaves_no_folder(action_file, tmp_path):
+    config = tmp_path / "bad.yaml"
+    config.write_text(tiny_config(data={"stream": "nope"}).as_yaml())
+    res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "0,1", "--out",
+                  tmp_path / "s")
+    assert res.exit_code == 2
+    line = res.output.strip().splitlines()[-1]
+    assert line.startswith("tactile: error: seed 0: ") and "nope" in line
+    assert line.endswith("(1 more seed(s) failed)")
+    assert not (tmp_path / "s").exists()
+
+
+@pytest.mark.parametrize("text, seeds", [("0-2,7", [0, 1, 2, 7]), ("5", [5]),
+                                         (" 1, 3 ", [1, 3]), ([4, 2], [4, 2])])
+def test_seeds_are_parsed(text, seeds):
+    assert parse_seeds(text) == seeds
+
+
+@pytest.mark.parametrize("text, message", [
+    ("1,1", "`seeds` gives seed 1 twice"), ("0-2,2", "`seeds` gives seed 2 twice"),
+    ("3-1", "`seeds` must be integers >= 0 such as 0,1,2 or 0-4, got '3-1'"),
+    ("a", "`seeds` must be integers >= 0 such as 0,1,2 or 0-4, got 'a'"),
+    ("0-100", "`seeds` names 101 seeds; at most 100"), ([-1], "`seeds` must be >= 0, got -1")])
+def test_bad_seeds_are_one_line(text, message):
+    with pytest.raises(InputError) as err:
+        parse_seeds(text)
+    assert str(err.value) == message
