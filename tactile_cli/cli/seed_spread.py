@@ -26,8 +26,9 @@ def seed_spread_command(
     config: Annotated[Path, typer.Argument(help="Training config (YAML, see configs/train_*.yaml).",
                                            show_default=False, metavar="CONFIG")],
     out: Annotated[Path, typer.Option(
-        "--out", "-o", help="Folder for seed_S/ run folders, seed_spread.json/.md/.png (a "
-        "stopped spread given the same folder resumes).", show_default=False,
+        "--out", "-o", help="Folder for seed_S/ run folders, seed_spread.json/.md/.png; built "
+        "beside it and put in place when every seed is done (a stopped spread given the same "
+        "folder resumes).", show_default=False,
         metavar="FOLDER")],
     data: Annotated[list[Path] | None, typer.Option(
         "--data", "-d", help="Tactile HDF5 file(s) to train on; repeat the option or list "
@@ -50,7 +51,8 @@ def seed_spread_command(
     plot: Annotated[bool, typer.Option(
         "--plot/--no-plot", help="Write seed_spread.png.")] = True,
     overwrite: Annotated[bool, typer.Option(
-        help="Train every seed again, and write into a folder that holds another spread.")
+        help="Replace an existing --out folder (once the new spread is done), and discard a "
+        "stopped spread of another config beside it.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print seed_spread.json.")] = False,
     device: DeviceOption = "auto",

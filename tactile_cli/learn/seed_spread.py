@@ -19,10 +19,12 @@ Outputs in ``OUT/``:
 - ``seed_spread.md``: the same as a table; ``seed_spread.png``: each seed's figure as a dot,
   the mean and +- 1 SD as a bar.
 
-A stopped spread given the same ``OUT`` resumes: a seed whose evaluation exists is read
-back, a cross-validation under way resumes its finished folds. ``OUT/.seed_spread_plan.json``
-holds the config, data and settings the folder was started with; another plan there is
-refused unless ``overwrite``.
+The spread is built beside ``OUT`` in ``.OUT.seed-spread-partial/`` (:func:`partial_dir`)
+and renamed to ``OUT`` when every seed is done, so an earlier ``OUT`` (replaced only with
+``overwrite``) stays as it was until then. A stopped spread resumes there: a seed whose
+evaluation exists is read back, a cross-validation under way resumes its finished folds.
+The partial folder's ``.seed_spread_plan.json`` holds the config, data and settings it was
+started with; another plan there is refused unless ``overwrite`` (which discards it).
 
 With a split that does not depend on the seed (``data.split`` grouped or blocked, or
 ``--split-from``) every seed is scored on the same trials, so the spread is the training's
@@ -47,7 +49,7 @@ from typing import TYPE_CHECKING, Any
 from .._version import __version__
 from ..errors import InputError
 from ..input_guard import check_outputs
-from ..store.atomic import save_figure, write_json, write_text
+from ..store.atomic import save_figure, swap_into_place, write_json, write_text
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 
@@ -219,27 +221,33 @@ def _same_plan(a: dict[str, Any], b: dict[str, Any]) -> bool:
     return key(a) == key(b)
 
 
-def _start(out: Path, plan: dict[str, Any], overwrite: bool) -> None:
-    """Make ``out`` or resume a stopped spread of the same plan there."""
-    check_output_folder(out, overwrite=True)
-    plan_path = out / PLAN_JSON
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        if not plan_path.is_file():
-            raise InputError("output folder exists and holds no seed spread; pass "
-                             "`overwrite=True` to replace it", path=out)
+def partial_dir(out: Path) -> Path:
+    """Where a spread under way keeps its seeds' runs until every seed is done."""
+    return out.with_name(f".{out.name}.seed-spread-partial")
+
+
+def _start(out: Path, plan: dict[str, Any], overwrite: bool) -> tuple[Path, bool]:
+    """The folder to build the spread in (:func:`partial_dir`), made or resumed, and
+    whether this call made it. ``out`` itself is only written when the spread is done."""
+    check_output_folder(out, overwrite=overwrite)
+    work = partial_dir(out)
+    check_output_folder(work, merge=True)
+    plan_path = work / PLAN_JSON
+    if work.is_dir() and any(work.iterdir()):
         try:
             earlier = json.loads(plan_path.read_text(encoding="utf-8"))
             same = _same_plan(earlier, plan)
         except (OSError, ValueError, KeyError, TypeError):
             same = False
         if not same:
-            raise InputError("holds a seed spread of another config, data or settings; pass "
-                             "`overwrite=True` to replace it", path=out)
-        if (out / RECORD_JSON).is_file():
-            raise InputError("holds a finished seed spread; pass `overwrite=True` to run it "
-                             "again", path=out)
-    out.mkdir(parents=True, exist_ok=True)
+            if not overwrite:
+                raise InputError("holds a stopped seed spread of another config, data or "
+                                 "settings; pass `overwrite=True` to discard it", path=work)
+            shutil.rmtree(work)
+    made = not work.exists()
+    work.mkdir(parents=True, exist_ok=True)
     write_json(plan_path, plan, overwrite=True)
+    return work, made
 
 
 def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bool) -> SeedRow:
@@ -313,6 +321,8 @@ def seed_spread(
     """Train and evaluate ``config`` on ``data_paths`` once per seed into ``out`` (module
     docstring). ``cv``: folds per seed (an integer >= 2 or ``"loto"``); None trains one model
     per seed and scores it on ``eval_data`` (required then, refused with ``cv``).
+    ``overwrite``: replace an earlier ``out`` (when the spread is done) and discard a stopped
+    spread of another plan beside it.
     Seeds run as tasks of :func:`..batch.map_tasks` (``workers`` local processes, default
     the cores, 0: here one after another; or an existing Dask ``scheduler``); each seed
     gives the same figures wherever it runs. ``on_seed`` gets each seed's row as it
@@ -343,12 +353,11 @@ def seed_spread(
     out = Path(out)
     check_outputs({"out": out}, [config, *data, *evals, split])
     plan = _plan(config, data, evals, cv, epochs, split, seed_list, command)
-    made = not out.exists()
-    _start(out, plan, overwrite)
+    work, made = _start(out, plan, overwrite)
     specs = [{"seed": seed, "config": str(config), "data": [str(p) for p in data],
               "eval_data": [str(p) for p in evals], "cv": cv, "epochs": epochs,
-              "split_from": None if split is None else str(split), "out": str(out),
-              "overwrite": overwrite, "device": device, "command": command}
+              "split_from": None if split is None else str(split), "out": str(work),
+              "overwrite": False, "device": device, "command": command}
              for seed in seed_list]
     rows: list[SeedRow] = []
     failed: list[tuple[int, str]] = []
@@ -362,7 +371,7 @@ def seed_spread(
             failed.append((seed_list[task.index], str(task.error)))
     if failed:
         if made and not rows:  # bad data or config: nothing here worth keeping
-            shutil.rmtree(out, ignore_errors=True)
+            shutil.rmtree(work, ignore_errors=True)
         seed, error = min(failed)
         more = f" ({len(failed) - 1} more seed(s) failed)" if len(failed) > 1 else ""
         raise InputError(f"seed {seed}: {error}{more}")
@@ -375,10 +384,14 @@ def seed_spread(
     if len(rows) < 3:
         result.notes.append(f"{len(rows)} seed(s): too few for an SD to mean much; give 5 or "
                             "more")
-    write_text(out / TABLE_MD, result.table() + "\n", overwrite=True)
+    for row in rows:  # where each run will be once the spread is in place
+        row.run = str(out / Path(row.run).name)
+    write_text(work / TABLE_MD, result.table() + "\n", overwrite=True)
     if plot:
-        plot_spread(result, out / FIGURE_PNG)
-    write_json(out / RECORD_JSON, result.as_dict(), overwrite=True)
+        plot_spread(result, work / FIGURE_PNG)
+    write_json(work / RECORD_JSON, result.as_dict(), overwrite=True)
+    (work / PLAN_JSON).unlink()
+    swap_into_place(work, out)
     return result
 
 
@@ -419,5 +432,5 @@ def spread_summary(result: SeedSpread) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["METRICS", "SeedRow", "SeedSpread", "parse_seeds", "plot_spread", "seed_spread",
-           "spread_summary", "summarise"]
+__all__ = ["METRICS", "SeedRow", "SeedSpread", "parse_seeds", "partial_dir", "plot_spread",
+           "run_seed", "seed_spread", "spread_summary", "summarise"]

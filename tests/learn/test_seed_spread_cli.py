@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from tactile_cli.cli import app
 from tactile_cli.errors import InputError
-from tactile_cli.learn.seed_spread import parse_seeds
+from tactile_cli.learn.seed_spread import parse_seeds, partial_dir, seed_spread
 
 from .conftest import tiny_config
 
@@ -72,31 +72,44 @@ def test_each_seed_is_the_run_that_train_and_evaluate_make(grouped_spread, actio
     assert (out / "seed_0" / "run.json").is_file()
 
 
-def test_a_stopped_spread_resumes_and_a_finished_one_is_kept(grouped_spread, action_file,
+def test_a_finished_spread_is_kept_and_a_stopped_one_resumes(grouped_spread, action_file,
                                                              tmp_path):
     config, out, record = grouped_spread
-    args = (config, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out, "--json")
-    res = _spread(*args)
+    res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out)
     assert res.exit_code == 2
-    assert res.output.strip().endswith("holds a finished seed spread; pass --overwrite to run "
-                                       "it again")
-    # stopped after seed 0: the record and seed 2's evaluation missing
-    (out / "seed_spread.json").unlink()
-    for path in sorted((out / "seed_2" / "eval").rglob("*"), reverse=True):
-        path.rmdir() if path.is_dir() else path.unlink()
-    res = _spread(*args)
-    assert res.exit_code == 0, res.output
-    again = json.loads(res.stdout)
-    assert [r["resumed"] for r in again["by_seed"]] == [True, True]
-    for a, b in zip(again["by_seed"], record["by_seed"], strict=True):
-        assert a["window_accuracy"] == b["window_accuracy"]
-    # another config in the same folder
+    assert res.output.strip().endswith("output folder exists and is not empty; pass "
+                                       "--overwrite to replace it")
+    # stopped after its first seed: the runs wait beside the output, which is not made
+    again = tmp_path / "again"
+
+    def stop(row):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        seed_spread(config, [action_file], out=again, seeds=[0, 2], cv=2, workers=0,
+                    on_seed=stop)
+    assert not again.exists() and (partial_dir(again) / "seed_0" / "run.json").is_file()
+    # another config is refused there, the same one resumes
     other = tmp_path / "other.yaml"
     other.write_text(config.read_text().replace("hidden: 16", "hidden: 8"))
-    res = _spread(other, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out)
+    res = _spread(other, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", again)
     assert res.exit_code == 2
-    assert "holds a seed spread of another config, data or settings; pass --overwrite" in (
-        res.output)
+    assert "holds a stopped seed spread of another config, data or settings; pass " \
+           "--overwrite to discard it" in res.output
+    resumed = seed_spread(config, [action_file], out=again, seeds=[0, 2], cv=2, workers=0)
+    assert [r.resumed for r in resumed.rows] == [True, False]
+    assert [r.metrics["window_accuracy"] for r in resumed.rows] == [
+        r["window_accuracy"] for r in record["by_seed"]]
+    assert not partial_dir(again).exists()
+    assert json.loads((again / "seed_spread.json").read_text())["by_seed"][0]["run"] == str(
+        again / "seed_0")
+    assert not (again / ".seed_spread_plan.json").exists()
+    # --overwrite replaces a finished spread, and only once the new one is done
+    res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "1", "--out", again,
+                  "--overwrite", "--json", "--no-plot")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in again.iterdir()) == ["seed_1", "seed_spread.json",
+                                                       "seed_spread.md"]
 
 
 def test_without_cv_each_seed_is_scored_on_the_eval_data(action_file, heldout_file, tmp_path):
