@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
             work = args.work if args.work is not None else Path(tmp) / "spread"
             result = seed_spread(args.config, args.data, out=work, seeds=seeds, cv=args.cv,
                                  overwrite=True, device="cpu", command=command, plot=False,
-                                 workers=args.workers, on_seed=lambda r: print(
+                                 latency=False, workers=args.workers, on_seed=lambda r: print(
                                      f"seed {r.seed} done", file=sys.stderr, flush=True))
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)

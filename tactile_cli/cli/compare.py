@@ -21,7 +21,8 @@ FLAGS: dict[str, Flag] = {
 def compare_command(
     runs: Annotated[list[Path], typer.Argument(
         help="Run folders written by `tactile train`, each evaluated with `tactile evaluate` on "
-        "the same data.", metavar="RUN", show_default=False)],
+        "the same data, or folders of `tactile seed-spread` (each one point: the mean over its "
+        "seeds, with their SD).", metavar="RUN", show_default=False)],
     data_name: Annotated[str | None, typer.Option(
         "--data-name",
         help="Evaluation to compare (RUN/eval/<name>); default: the one every run has.",

@@ -29,6 +29,11 @@ fraction, that a classification head must reach, or an MAE, in the label's units
 regression head must not exceed) the eligible runs are those meeting every target instead
 of those within the margin, and when none does the comparison says so.
 
+A ``tactile seed-spread`` folder may stand for a run (:func:`spread_runs`): its point is
+the mean over its seeds (:func:`spread_point`; the cost is the first seed's, which the
+spread times alone), the table gives the seeds' SD, and the notes say where that SD is
+larger than the margin or than the gap the choice rests on (:func:`seed_notes`).
+
 Outputs (:func:`write_comparison`): ``compare.png`` (the chart), ``compare.csv`` (the
 table) and ``compare.json`` (the table, the choice and the provenance: command, tool
 version, the metrics files read with their SHA-256), each written atomically.
@@ -156,6 +161,12 @@ class RunPoint:
     """Batch-1 median latency (ms) of the run's exported model (``tactile evaluate
     --exported``) where measured: the deployed cost beside torch's ``latency_ms``."""
     exported_runtime: str = ""
+    seeds: dict[str, Any] | None = None
+    """A `tactile seed-spread` folder given as one run: ``n``, the ``seeds``, each seed's
+    ``scores`` and their ``sd`` (fractions; ddof 1), ``min`` and ``max``. Then ``score``,
+    ``accuracy``, ``macro_f1`` and ``head_values`` are the means over the seeds, the cost
+    and ``n_params`` are the first seed's, and ``score_ci95`` is None (an interval over
+    trials of one seed is not one of the mean)."""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -430,6 +441,89 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
     )
 
 
+SPREAD_JSON = "seed_spread.json"
+
+
+def spread_runs(path: Path) -> list[Path] | None:
+    """The seed runs (``seed_S/``) of a ``tactile seed-spread`` folder, in its seed order;
+    None when ``path`` is not one (no seed_spread.json)."""
+    record = path / SPREAD_JSON
+    if not (path.is_dir() and record.is_file()):
+        return None
+    seeds = _read_seeds(record)
+    if not isinstance(seeds, list) or not seeds or not all(
+            isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+        raise InputError("holds no list of seeds; re-create it with `tactile seed-spread`",
+                         path=record)
+    return [check_run_folder(path / f"seed_{s}") for s in seeds]
+
+
+def _read_seeds(record: Path) -> Any:
+    import json
+
+    try:
+        data = json.loads(record.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise InputError(f"not a readable seed-spread record ({exc.__class__.__name__}); "
+                         "re-create it with `tactile seed-spread`", path=record) from None
+    return data.get("seeds") if isinstance(data, dict) else None
+
+
+def spread_point(point: RunPoint, members: Sequence[Path], folder: Path, data_name: str,
+                 metric: str) -> RunPoint:
+    """``point`` (the first seed's) turned into the point of the whole spread: scores and
+    head values averaged over the seeds (:attr:`RunPoint.seeds`)."""
+    metrics = [runs.read_metrics(m / runs.EVAL_DIR / data_name / runs.METRICS_JSON)
+               if (m / runs.EVAL_DIR / data_name / runs.METRICS_JSON).is_file() else None
+               for m in members]
+    for m, got in zip(members, metrics, strict=True):
+        if got is None:
+            raise InputError(f"no evaluation named {data_name!r}; re-create the spread with "
+                             "`tactile seed-spread`", path=m)
+    scores = [_score(m, metric, member) for m, member in zip(metrics, members, strict=True)]
+
+    def mean(values: Sequence[float | None]) -> float | None:
+        kept = [v for v in values if v is not None]
+        return float(np.mean(kept)) if len(kept) == len(values) else None
+
+    heads = [_head_values(m)[0] for m in metrics]
+    primary = [m["heads"][m["primary_head"]] for m in metrics]
+    point.run = str(folder)
+    point.score = float(np.mean(scores))
+    point.accuracy = mean([h.get("accuracy") for h in primary])
+    point.macro_f1 = mean([h.get("macro_f1") for h in primary])
+    point.head_values = {k: mean([h.get(k) for h in heads]) for k in heads[0]}
+    point.score_ci95 = None
+    point.seeds = {"n": len(scores), "seeds": [m.name.removeprefix("seed_") for m in members],
+                   "scores": scores,
+                   "sd": float(np.std(scores, ddof=1)) if len(scores) > 1 else 0.0,
+                   "min": min(scores), "max": max(scores)}
+    return point
+
+
+def seed_notes(cmp: Comparison) -> list[str]:
+    """Where the seed spread is larger than what the choice rests on."""
+    notes = []
+    spread = [p for p in cmp.points if p.seeds is not None and p.seeds["n"] > 1]
+    if not spread:
+        return notes
+    worst = max(spread, key=lambda p: p.seeds["sd"])
+    sd_pp = 100 * worst.seeds["sd"]
+    if not cmp.targets and sd_pp > cmp.margin_pp:
+        notes.append(f"the seed SD of {worst.label} ({sd_pp:.2f} pp) is larger than the margin "
+                     f"({cmp.margin_pp:g} pp): which runs are within it can change with the "
+                     "seed; a margin of about one seed SD is the finest this comparison "
+                     "supports")
+    n = cmp.needed
+    if n is not None and n is not cmp.best:
+        gap_pp = 100 * (cmp.best.score - n.score)
+        sds = [100 * p.seeds["sd"] for p in (n, cmp.best) if p.seeds is not None]
+        if sds and gap_pp < max(sds):
+            notes.append(f"{n.label} and {cmp.best.label} differ by {gap_pp:.2f} pp, less than "
+                         f"their seed SD ({max(sds):.2f} pp): the seed could reorder them")
+    return notes
+
+
 def _recordings(data: Sequence[dict[str, Any]]) -> list[tuple[tuple[str, ...], int]]:
     """Per data file: the recordings it holds (see
     :func:`~tactile_cli.store.reader.recording_hashes`; older metrics files without them:
@@ -542,27 +636,33 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
     share). Raises :class:`InputError` for a missing run or evaluation, evaluations of
     different data, or a run without a classification head.
     """
-    dirs = [check_run_folder(Path(d)) for d in run_dirs]
-    if not dirs:
+    given = [Path(d) for d in run_dirs]
+    if not given:
         raise InputError("no runs to compare; give RUN folders")
     seen: set[Path] = set()
-    for d in dirs:
+    for d in given:
         if d.resolve() in seen:
             raise InputError("run given twice", path=d)
         seen.add(d.resolve())
+    members = [spread_runs(d) for d in given]  # a seed-spread folder: its seed runs
+    dirs = [check_run_folder(d) if m is None else m[0] for d, m in zip(given, members,
+                                                                          strict=True)]
     families, infos = [], []
     for d in dirs:
         info = runs.read_run_info(d)
         families.append(info["model"]["family"])
         infos.append(info)
     name = choose_data_name(dirs, data_name)
-    labels = run_labels(dirs, families)
+    labels = run_labels(given, families)
     points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
+    for i, m in enumerate(members):
+        if m is not None:
+            points[i] = spread_point(points[i], m, given[i], name, metric)
     _check_same_data(points)
     notes = _check_inputs(points, infos)
     cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name,
                          targets=targets)
-    cmp.notes = notes
+    cmp.notes = notes + seed_notes(cmp)
     cmp.inputs = [{"path": p.metrics_path, "sha256": sha256_of(p.metrics_path)}
                   for p in points]
     return cmp
@@ -572,7 +672,7 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
 TABLE_COLUMNS = ("label", "family", "score_pct", "delta_pp", "accuracy_pct", "macro_f1",
                  "latency_ms_median", "latency_ms_p95", "windows_per_s", "n_params",
                  "size_mb", "pareto", "within_margin", "needed", "fastest", "meets_targets",
-                 "run", "exported_latency_ms")
+                 "run", "exported_latency_ms", "n_seeds", "seed_sd_pp")
 
 
 def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
@@ -590,6 +690,8 @@ def table_rows(cmp: Comparison) -> list[dict[str, Any]]:
             "within_margin": p.within_margin, "needed": p is cmp.needed,
             "fastest": p is cmp.fastest, "meets_targets": p.meets_targets, "run": p.run,
             "exported_latency_ms": p.exported_latency_ms,
+            "n_seeds": None if p.seeds is None else p.seeds["n"],
+            "seed_sd_pp": None if p.seeds is None else 100 * p.seeds["sd"],
         })
     return rows
 

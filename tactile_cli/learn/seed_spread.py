@@ -299,6 +299,24 @@ def run_seed(spec: dict[str, Any]) -> SeedRow:
     return _row(seed, run, result.as_dict(), time.perf_counter() - started, resumed=trained)
 
 
+def _time_first_seed(run: Path, eval_data: list[Path], cv: int | str | None, device: str,
+                     command: str) -> None:
+    """Evaluate ``run`` again with its latency measured, unless its evaluation has one (the
+    figures are the same: the same model on the same trials)."""
+    from .cv import evaluate_cv
+    from .evaluate import evaluate
+
+    path = run / "eval" / EVAL_NAME / "metrics.json"
+    if json.loads(path.read_text(encoding="utf-8")).get("latency"):
+        return
+    if cv is not None:
+        evaluate_cv(run, None, name=EVAL_NAME, latency=True, command=command, overwrite=True,
+                    device=device)
+    else:
+        evaluate(run, eval_data, name=EVAL_NAME, latency=True, command=command,
+                 overwrite=True, device=device)
+
+
 def seed_spread(
     config: str | Path,
     data_paths: Sequence[str | Path],
@@ -313,6 +331,7 @@ def seed_spread(
     device: str = "auto",
     command: str | None = None,
     plot: bool = True,
+    latency: bool = True,
     scheduler: str | None = None,
     workers: int | None = None,
     on_seed: Callable[[SeedRow], None] | None = None,
@@ -321,6 +340,8 @@ def seed_spread(
     """Train and evaluate ``config`` on ``data_paths`` once per seed into ``out`` (module
     docstring). ``cv``: folds per seed (an integer >= 2 or ``"loto"``); None trains one model
     per seed and scores it on ``eval_data`` (required then, refused with ``cv``).
+    ``latency``: time the first seed's model at batch 1 once every seed is done (alone in
+    this process, so that no seed's training slows it; ``tactile compare`` reads it).
     ``overwrite``: replace an earlier ``out`` (when the spread is done) and discard a stopped
     spread of another plan beside it.
     Seeds run as tasks of :func:`..batch.map_tasks` (``workers`` local processes, default
@@ -376,6 +397,8 @@ def seed_spread(
         more = f" ({len(failed) - 1} more seed(s) failed)" if len(failed) > 1 else ""
         raise InputError(f"seed {seed}: {error}{more}")
     rows.sort(key=lambda r: seed_list.index(r.seed))
+    if latency:
+        _time_first_seed(work / f"seed_{seed_list[0]}", evals, cv, device, command)
     result = SeedSpread(out_dir=out, plan=plan, rows=rows, summary=summarise(rows))
     if plan["split_depends_on_seed"] and cv is not None:
         result.notes.append(f"data.split is {plan['split']['mode']}: the folds are drawn from "

@@ -192,7 +192,10 @@ def comparison_table(cmp: Comparison) -> TextTable:
 
     rows = table_rows(cmp)
     exported = any(row["exported_latency_ms"] is not None for row in rows)
-    table = TextTable(["run", "family", f"{cmp.metric_label} (%)", "vs best (pp)", "batch-1 ms",
+    seeded = any(row["n_seeds"] is not None for row in rows)
+    table = TextTable(["run", "family", f"{cmp.metric_label} (%)",
+                       *(("seeds", "seed SD (pp)") if seeded else ()), "vs best (pp)",
+                       "batch-1 ms",
                        "p95 ms", *(("exported ms",) if exported else ()), "windows/s",
                        "parameters", "MB", "Pareto", "in margin", ""],
                       title=f"{cmp.metric_label} against cost on {cmp.data_name}", left=2,
@@ -206,7 +209,11 @@ def comparison_table(cmp: Comparison) -> TextTable:
         if row["meets_targets"] is not None:
             verdict += " (meets targets)" if row["meets_targets"] else " (misses a target)"
         table.rows.append([
-            name, row["family"], f"{row['score_pct']:.2f}", f"{row['delta_pp']:+.2f}",
+            name, row["family"], f"{row['score_pct']:.2f}",
+            *(("" if row["n_seeds"] is None else str(row["n_seeds"]),
+               "" if row["seed_sd_pp"] is None else f"{row['seed_sd_pp']:.2f}")
+              if seeded else ()),
+            f"{row['delta_pp']:+.2f}",
             ms(row["latency_ms_median"]), ms(row["latency_ms_p95"]),
             *((ms(row["exported_latency_ms"]),) if exported else ()),
             "" if row["windows_per_s"] is None else f"{row['windows_per_s']:,.0f}",

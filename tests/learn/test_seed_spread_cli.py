@@ -172,3 +172,39 @@ def test_bad_seeds_are_one_line(text, message):
     with pytest.raises(InputError) as err:
         parse_seeds(text)
     assert str(err.value) == message
+
+
+def test_compare_takes_a_spread_as_one_run_at_its_seeds_mean(grouped_spread, action_file,
+                                                           tmp_path):
+    config, out, record = grouped_spread
+    other = tmp_path / "small.yaml"
+    other.write_text(config.read_text().replace("hidden: 16", "hidden: 4"))
+    res = _spread(other, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out",
+                  tmp_path / "small", "--no-plot")
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(app, ["compare", str(out), str(tmp_path / "small"), "--json",
+                              "--margin", "0"])
+    assert res.exit_code == 0, res.output
+    cmp = json.loads(res.stdout)
+    point = next(r for r in cmp["runs"] if r["run"] == str(out))
+    acc = [r["window_accuracy"] for r in record["by_seed"]]
+    assert point["score"] == pytest.approx(sum(acc) / 2)
+    assert point["seeds"]["n"] == 2 and point["seeds"]["scores"] == acc
+    assert point["seeds"]["sd"] == pytest.approx(abs(acc[0] - acc[1]) / 2 ** 0.5)
+    assert point["score_ci95"] is None
+    # the cost is the first seed's, timed once the spread was done
+    metrics = json.loads((out / "seed_0" / "eval" / "seed_spread" / "metrics.json").read_text())
+    assert point["latency_ms"] == metrics["latency"]["batch1_ms_median"] > 0
+    sd_pp = 100 * max(r["seeds"]["sd"] for r in cmp["runs"])
+    assert any("larger than the margin (0 pp)" in n for n in cmp["notes"]) == (sd_pp > 0)
+
+
+def test_compare_refuses_a_spread_missing_a_seed(grouped_spread, tmp_path):
+    _, out, _ = grouped_spread
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "seed_spread.json").write_text((out / "seed_spread.json").read_text())
+    res = runner.invoke(app, ["compare", str(out), str(broken)])
+    assert res.exit_code == 2
+    assert res.output.strip() == (f"tactile: error: {broken / 'seed_0'}: run folder not found "
+                                  "(give the folder `tactile train` wrote)")
