@@ -502,18 +502,21 @@ def spread_point(point: RunPoint, members: Sequence[Path], folder: Path, data_na
 
 
 def seed_notes(cmp: Comparison) -> list[str]:
-    """Where the seed spread is larger than what the choice rests on."""
+    """Where the seed spread is larger than what the choice rests on: a run within one seed
+    SD (the largest of the spreads) of the margin's edge, and a chosen run closer to the
+    best than the seed SD."""
     notes = []
     spread = [p for p in cmp.points if p.seeds is not None and p.seeds["n"] > 1]
     if not spread:
         return notes
     worst = max(spread, key=lambda p: p.seeds["sd"])
     sd_pp = 100 * worst.seeds["sd"]
-    if not cmp.targets and sd_pp > cmp.margin_pp:
-        notes.append(f"the seed SD of {worst.label} ({sd_pp:.2f} pp) is larger than the margin "
-                     f"({cmp.margin_pp:g} pp): which runs are within it can change with the "
-                     "seed; a margin of about one seed SD is the finest this comparison "
-                     "supports")
+    edge = [p for p in cmp.points if p is not cmp.best
+            and abs(100 * (cmp.best.score - p.score) - cmp.margin_pp) < sd_pp]
+    if not cmp.targets and edge:
+        notes.append(f"{', '.join(p.label for p in edge)}: within one seed SD ({sd_pp:.2f} pp, "
+                     f"{worst.label}) of the margin's edge ({cmp.margin_pp:g} pp below the "
+                     "best), so whether it is within the margin can change with the seed")
     n = cmp.needed
     if n is not None and n is not cmp.best:
         gap_pp = 100 * (cmp.best.score - n.score)
