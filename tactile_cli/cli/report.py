@@ -21,7 +21,8 @@ FLAGS: dict[str, Flag] = {
 def report_command(
     ctx: typer.Context,
     runs: Annotated[list[Path] | None, typer.Argument(
-        help="Run folders written by `tactile train`. A path that is a file is taken as a data "
+        help="Run folders written by `tactile train`, or folders of `tactile seed-spread` (their "
+        "seeds' table and plot, and each seed's run). A path that is a file is taken as a data "
         "file (so `--data *.h5` works).", metavar="RUN", show_default=False)] = None,
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Folder for index.html and report.json.", show_default=False,

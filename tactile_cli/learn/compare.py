@@ -450,7 +450,7 @@ def spread_runs(path: Path) -> list[Path] | None:
     record = path / SPREAD_JSON
     if not (path.is_dir() and record.is_file()):
         return None
-    seeds = _read_seeds(record)
+    seeds = read_spread_record(record).get("seeds")
     if not isinstance(seeds, list) or not seeds or not all(
             isinstance(s, int) and not isinstance(s, bool) for s in seeds):
         raise InputError("holds no list of seeds; re-create it with `tactile seed-spread`",
@@ -458,7 +458,8 @@ def spread_runs(path: Path) -> list[Path] | None:
     return [check_run_folder(path / f"seed_{s}") for s in seeds]
 
 
-def _read_seeds(record: Path) -> Any:
+def read_spread_record(record: Path) -> dict[str, Any]:
+    """A ``seed_spread.json`` as a dict; one :class:`InputError` when it cannot be read."""
     import json
 
     try:
@@ -466,7 +467,10 @@ def _read_seeds(record: Path) -> Any:
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(f"not a readable seed-spread record ({exc.__class__.__name__}); "
                          "re-create it with `tactile seed-spread`", path=record) from None
-    return data.get("seeds") if isinstance(data, dict) else None
+    if not isinstance(data, dict):
+        raise InputError("not a seed-spread record (not a JSON object); re-create it with "
+                         "`tactile seed-spread`", path=record)
+    return data
 
 
 def spread_point(point: RunPoint, members: Sequence[Path], folder: Path, data_name: str,

@@ -57,11 +57,14 @@ from ..store.outdir import check_output_folder, output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .compare import (
+    SPREAD_JSON,
     check_run_folder,
     compare,
     eval_names,
     plot_comparison,
+    read_spread_record,
     run_labels,
+    spread_runs,
     table_rows,
 )
 from .gallery import Gallery, group_figures
@@ -841,10 +844,53 @@ def _figure_section(folder: Path, file_origins: Mapping[str, dict[str, Any]],
 
 
 # -- the page --------------------------------------------------------------------------------
+def _spread_section(folder: Path, inputs: _Inputs) -> str:
+    """One ``tactile seed-spread`` folder: every seed's figures, their mean, SD and spread,
+    the notes and the dot plot."""
+    record_path = folder / SPREAD_JSON
+    inputs.add("seed spread", record_path)
+    record = read_spread_record(record_path)
+    summary = _dict(record.get("summary"))
+    names = [n for n in ("window_accuracy", "window_macro_f1", "trial_majority_accuracy",
+                         "trial_mean_probability_accuracy", "group_mean_probability_accuracy")
+             if n in summary]
+    labels = {"window_accuracy": "per window", "window_macro_f1": "macro F1 per window",
+              "trial_majority_accuracy": "per trial, majority",
+              "trial_mean_probability_accuracy": "per trial, mean prob.",
+              "group_mean_probability_accuracy": "per group, mean prob."}
+    rows = [[f"seed {_dict(r).get('seed')}", *(_pct(_dict(r).get(n)) for n in names),
+             _dict(r).get("n_trials", "")] for r in _list(record.get("by_seed"))]
+    for stat in ("mean", "sd", "min", "max", "spread"):
+        rows.append([stat, *(_pct(_dict(summary.get(n)).get(stat)) for n in names), ""])
+    cv = record.get("cv")
+    how = (f"{cv}-fold cross-validation, split {_dict(record.get('split')).get('mode', '?')}"
+           if cv is not None else "scored on " + ", ".join(
+               str(_dict(d).get("path")) for d in _list(record.get("eval_data"))))
+    html = (f"<h3>{_e(folder.name)}</h3><p>config <code>{_e(record.get('config'))}</code>; "
+            f"{_e(how)}; the figures of trials each seed's model never saw.</p>"
+            + _table(["seed", *(f"{labels[n]} (%)" for n in names), "trials"], rows))
+    html += "".join(f"<p class='note'>{_e(n)}</p>" for n in _list(record.get("notes")))
+    png = folder / "seed_spread.png"
+    if png.is_file():
+        inputs.add("figure", png)
+        html += _figure(png.read_bytes(), f"{folder.name}: each seed's figure (dots), the "
+                        "mean and one SD")
+    return html
+
+
 def _check_inputs(run_dirs: Sequence[str | Path], data_paths: Sequence[str | Path],
-                  figure_dirs: Sequence[str | Path]) -> tuple[list[Path], list[Path], list[Path]]:
-    """The inputs as paths, each checked before anything is written."""
-    dirs = [check_run_folder(Path(d)) for d in run_dirs]
+                  figure_dirs: Sequence[str | Path]
+                  ) -> tuple[list[Path], list[Path], list[Path], list[Path]]:
+    """The inputs as paths, each checked before anything is written; a seed-spread folder
+    stands for its seed runs (and is returned in the last list)."""
+    dirs, spreads = [], []
+    for d in map(Path, run_dirs):
+        members = spread_runs(d)
+        if members is None:
+            dirs.append(check_run_folder(d))
+        else:
+            spreads.append(d)
+            dirs.extend(members)
     datas = [Path(p) for p in data_paths]
     figs = [Path(p) for p in figure_dirs]
     if not dirs and not datas and not figs:
@@ -855,7 +901,7 @@ def _check_inputs(run_dirs: Sequence[str | Path], data_paths: Sequence[str | Pat
     for p in figs:
         if not p.is_dir():
             raise InputError("figure folder not found (`figure_dirs` takes folders)", path=p)
-    return dirs, datas, figs
+    return dirs, datas, figs, spreads
 
 
 def _page(heading: str, created: str, cmd: str, sections: Sequence[tuple[str, str, str]],
@@ -890,7 +936,7 @@ def build_report(
 
     Raises :class:`InputError` before writing anything when a run folder, data file or
     figure folder is missing."""
-    dirs, datas, figs = _check_inputs(run_dirs, data_paths, figure_dirs)
+    dirs, datas, figs, spreads = _check_inputs(run_dirs, data_paths, figure_dirs)
     check_outputs({"out_dir": out_dir}, [*(d / runs.RUN_JSON for d in dirs), *datas],
                   trees=figs)
     out = check_output_folder(out_dir, merge=True)  # added to; a file there is refused
@@ -919,6 +965,7 @@ def build_report(
         fig_parts.append(part)
         fig_names += names
 
+    seeds_html = "".join(_spread_section(f, inputs) for f in spreads)
     created = utc_now()
     cmd = command if command is not None else current_command()
     heading = title or f"tactile report: {len(dirs)} run(s)"
@@ -927,6 +974,7 @@ def build_report(
         ("compare", "Comparison: accuracy against latency", (
             cmp_html or "<p class='muted'>no evaluation is shared by two or more runs; "
                         "evaluate them on the same data to compare.</p>") if dirs else ""),
+        ("seeds", "Seed spreads: how much of a figure is the seed", seeds_html),
         ("perturb", "Stability under perturbation", pert_html),
         ("runs", "Runs", run_html),
         ("data", "Data files", data_html),
@@ -938,7 +986,8 @@ def build_report(
     record = {
         "format": "tactile-report", "format_version": 1, "tool_version": __version__,
         "created_utc": created, "command": cmd, "index": str(index),
-        "runs": [str(d) for d in dirs], "compared": compared, "perturbations": perturbed,
+        "runs": [str(d) for d in dirs], "seed_spreads": [str(f) for f in spreads],
+        "compared": compared, "perturbations": perturbed,
         "data": [str(p) for p in datas], "figure_dirs": [str(p) for p in figs],
         "origins": [r.record() for r in results],
         "data_origins": {str(p): o for p, o in data_origins.items()},

@@ -214,3 +214,17 @@ def test_compare_refuses_a_spread_missing_a_seed(grouped_spread, tmp_path):
     assert res.exit_code == 2
     assert res.output.strip() == (f"tactile: error: {broken / 'seed_0'}: run folder not found "
                                   "(give the folder `tactile train` wrote)")
+
+
+def test_report_shows_a_spread_and_its_seed_runs(grouped_spread, tmp_path):
+    _, out, record = grouped_spread
+    res = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "rep")])
+    assert res.exit_code == 0, res.output
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "Seed spreads: how much of a figure is the seed" in page
+    first = record["by_seed"][0]["window_accuracy"]
+    assert f"{100 * first:.2f}" in page
+    prov = json.loads((tmp_path / "rep" / "report.json").read_text())
+    assert prov["seed_spreads"] == [str(out)]
+    assert prov["runs"] == [str(out / "seed_0"), str(out / "seed_2")]
+    assert any(i["role"] == "seed spread" for i in prov["inputs"])
