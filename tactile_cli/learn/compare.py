@@ -646,14 +646,14 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
     given = [Path(d) for d in run_dirs]
     if not given:
         raise InputError("no runs to compare; give RUN folders")
-    seen: set[Path] = set()
-    for d in given:
-        if d.resolve() in seen:
-            raise InputError("run given twice", path=d)
-        seen.add(d.resolve())
     members = [spread_runs(d) for d in given]  # a seed-spread folder: its seed runs
     dirs = [check_run_folder(d) if m is None else m[0] for d, m in zip(given, members,
                                                                           strict=True)]
+    seen: set[Path] = set()
+    for d in given:  # checked above: no longer a broken link or a loop
+        if d.resolve() in seen:
+            raise InputError("run given twice", path=d)
+        seen.add(d.resolve())
     families, infos = [], []
     for d in dirs:
         info = runs.read_run_info(d)
