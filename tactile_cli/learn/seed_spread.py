@@ -205,7 +205,10 @@ def _plan(config: Path, data: list[Path], eval_data: list[Path], cv: int | str |
         {"path": str(split_from), "sha256": sha256_of(split_from)},
         "cv": cv, "epochs": epochs if epochs is not None else cfg.optim.epochs,
         "split": cfg.data.split.model_dump(mode="json"),
-        "split_depends_on_seed": mode in ("auto", "random", "stratified"),
+        # which trials are scored: fixed without cv (the eval data) and with leave-one-
+        # trial-out folds; drawn from the seed with k random or stratified folds
+        "split_depends_on_seed": cv is not None and cv != "loto"
+        and mode in ("auto", "random", "stratified"),
         "seeds": seeds,
     }
 

@@ -228,3 +228,16 @@ def test_report_shows_a_spread_and_its_seed_runs(grouped_spread, tmp_path):
     assert prov["seed_spreads"] == [str(out)]
     assert prov["runs"] == [str(out / "seed_0"), str(out / "seed_2")]
     assert any(i["role"] == "seed spread" for i in prov["inputs"])
+
+
+@pytest.mark.parametrize("mode, cv, depends", [("random", 2, True), ("random", "loto", False),
+                                               ("stratified", None, False),
+                                               ("group", 2, False)])
+def test_whether_the_folds_depend_on_the_seed(action_file, tmp_path, mode, cv, depends):
+    from tactile_cli.learn.seed_spread import _plan
+
+    split = {"mode": mode, "by": "force_level"} if mode in ("group", "stratified") else {
+        "mode": mode}
+    config = _config(tmp_path, **split)
+    plan = _plan(config, [action_file], [], cv, None, None, [0], "test")
+    assert plan["split_depends_on_seed"] is depends
