@@ -442,6 +442,8 @@ def read_point(run_dir: Path, data_name: str, metric: str, label: str = "") -> R
 
 
 SPREAD_JSON = "seed_spread.json"
+#: the evaluation name of every seed's run in a seed-spread folder
+SPREAD_EVAL = "seed_spread"
 
 
 def spread_runs(path: Path) -> list[Path] | None:
@@ -659,12 +661,19 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
         info = runs.read_run_info(d)
         families.append(info["model"]["family"])
         infos.append(info)
-    name = choose_data_name(dirs, data_name)
+    plain = [d for d, m in zip(dirs, members, strict=True) if m is None]
+    spread_first = [d for d, m in zip(dirs, members, strict=True) if m is not None]
+    if plain and spread_first:  # spreads are read at their own evaluation, on the same data
+        name = choose_data_name(plain, data_name)
+        spread_name = choose_data_name(spread_first, SPREAD_EVAL)
+    else:
+        name = spread_name = choose_data_name(dirs, data_name)
     labels = run_labels(given, families)
-    points = [read_point(d, name, metric, lab) for d, lab in zip(dirs, labels, strict=True)]
+    points = [read_point(d, name if m is None else spread_name, metric, lab)
+              for d, m, lab in zip(dirs, members, labels, strict=True)]
     for i, m in enumerate(members):
         if m is not None:
-            points[i] = spread_point(points[i], m, given[i], name, metric)
+            points[i] = spread_point(points[i], m, given[i], spread_name, metric)
     _check_same_data(points)
     notes = _check_inputs(points, infos)
     cmp = compare_points(points, margin_pp=margin_pp, metric=metric, data_name=name,

@@ -52,6 +52,7 @@ from ..input_guard import check_outputs
 from ..store.atomic import save_figure, swap_into_place, write_json, write_text
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
+from .compare import SPREAD_EVAL, SPREAD_JSON
 
 if TYPE_CHECKING:
     from ..batch import BatchCounts
@@ -71,9 +72,9 @@ LABELS = {
     "trial_mean_probability_accuracy": "per trial, mean prob.",
     "group_mean_probability_accuracy": "per group, mean prob.",
 }
-EVAL_NAME = "seed_spread"
+EVAL_NAME = SPREAD_EVAL  # each seed's evaluation: seed_S/eval/seed_spread/
 PLAN_JSON = ".seed_spread_plan.json"
-RECORD_JSON = "seed_spread.json"
+RECORD_JSON = SPREAD_JSON
 TABLE_MD = "seed_spread.md"
 FIGURE_PNG = "seed_spread.png"
 MAX_SEEDS = 100

@@ -241,3 +241,18 @@ def test_whether_the_folds_depend_on_the_seed(action_file, tmp_path, mode, cv, d
     config = _config(tmp_path, **split)
     plan = _plan(config, [action_file], [], cv, None, None, [0], "test")
     assert plan["split_depends_on_seed"] is depends
+
+
+def test_compare_puts_a_spread_beside_a_plain_run_of_the_same_data(grouped_spread,
+                                                                   action_file, tmp_path):
+    config, out, record = grouped_spread
+    run = tmp_path / "plain"
+    assert runner.invoke(app, ["train", str(config), "--data", str(action_file), "--cv", "2",
+                               "--seed", "2", "--out", str(run)]).exit_code == 0
+    assert runner.invoke(app, ["evaluate", str(run), "--no-latency"]).exit_code == 0
+    res = runner.invoke(app, ["compare", str(out), str(run), "--json"])
+    assert res.exit_code == 0, res.output
+    cmp = json.loads(res.stdout)
+    plain = next(r for r in cmp["runs"] if r["run"] == str(run))
+    assert plain["seeds"] is None and plain["eval_name"] != "seed_spread"
+    assert plain["score"] == record["by_seed"][1]["window_accuracy"]  # seed 2 alone
