@@ -69,7 +69,7 @@ def seed_spread_command(
     (--workers, --scheduler); each gives the same figures wherever it runs."""
 
     def body() -> None:
-        from ..learn.seed_spread import parse_seeds, seed_spread, spread_summary
+        from ..learn.seed_spread import parse_seeds, seed_line, seed_spread, spread_summary
 
         k = cv if cv is not None or eval_data else 5
         seed_list = parse_seeds(seeds)
@@ -79,7 +79,7 @@ def seed_spread_command(
                 config, data_files(data, ctx), out=out, seeds=seed_list, cv=k,
                 eval_data=eval_data, epochs=epochs, split_from=split_from,
                 overwrite=overwrite, device=device, plot=plot, scheduler=scheduler,
-                workers=workers, on_seed=lambda r: bar.step(_seed_line(r), advance=1))
+                workers=workers, on_seed=lambda r: bar.step(seed_line(r), advance=1))
         warn(result.notes)
         if as_json:
             echo_json(result.as_dict())
@@ -88,9 +88,3 @@ def seed_spread_command(
 
     run_guarded(body, flags=FLAGS)
 
-
-def _seed_line(row) -> str:  # noqa: ANN001 - a SeedRow
-    acc = row.metrics.get("window_accuracy")
-    text = "-" if acc is None else f"{100 * acc:.1f} %"
-    how = "read back" if row.resumed and row.wall_time_s == 0 else f"{row.wall_time_s:.0f} s"
-    return f"seed {row.seed}: window accuracy {text} ({how})"

@@ -850,14 +850,10 @@ def _spread_section(folder: Path, inputs: _Inputs) -> str:
     record_path = folder / SPREAD_JSON
     inputs.add("seed spread", record_path)
     record = read_spread_record(record_path)
+    from .seed_spread import LABELS, METRICS
+
     summary = _dict(record.get("summary"))
-    names = [n for n in ("window_accuracy", "window_macro_f1", "trial_majority_accuracy",
-                         "trial_mean_probability_accuracy", "group_mean_probability_accuracy")
-             if n in summary]
-    labels = {"window_accuracy": "per window", "window_macro_f1": "macro F1 per window",
-              "trial_majority_accuracy": "per trial, majority",
-              "trial_mean_probability_accuracy": "per trial, mean prob.",
-              "group_mean_probability_accuracy": "per group, mean prob."}
+    names = [n for n in METRICS if n in summary]
     rows = [[f"seed {_dict(r).get('seed')}", *(_pct(_dict(r).get(n)) for n in names),
              _dict(r).get("n_trials", "")] for r in _list(record.get("by_seed"))]
     for stat in ("mean", "sd", "min", "max", "spread"):
@@ -868,7 +864,7 @@ def _spread_section(folder: Path, inputs: _Inputs) -> str:
                str(_dict(d).get("path")) for d in _list(record.get("eval_data"))))
     html = (f"<h3>{_e(folder.name)}</h3><p>config <code>{_e(record.get('config'))}</code>; "
             f"{_e(how)}; the figures of trials each seed's model never saw.</p>"
-            + _table(["seed", *(f"{labels[n]} (%)" for n in names), "trials"], rows))
+            + _table(["seed", *(f"{LABELS[n]} (%)" for n in names), "trials"], rows))
     html += "".join(f"<p class='note'>{_e(n)}</p>" for n in _list(record.get("notes")))
     png = folder / "seed_spread.png"
     if png.is_file():

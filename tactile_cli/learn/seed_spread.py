@@ -450,6 +450,14 @@ def plot_spread(result: SeedSpread, path: Path) -> Path:
     return save_figure(fig, path, meta=meta, overwrite=True)
 
 
+def seed_line(row: SeedRow) -> str:
+    """One progress line per finished seed: ``seed 3: window accuracy 61.8 % (22 s)``."""
+    acc = row.metrics.get("window_accuracy")
+    text = "-" if acc is None else f"{100 * acc:.1f} %"
+    how = "read back" if row.resumed and row.wall_time_s == 0 else f"{row.wall_time_s:.0f} s"
+    return f"seed {row.seed}: window accuracy {text} ({how})"
+
+
 def spread_summary(result: SeedSpread) -> str:
     """Lines for people: the table and where the outputs are (the notes go to stderr as
     warnings)."""
@@ -460,4 +468,4 @@ def spread_summary(result: SeedSpread) -> str:
 
 
 __all__ = ["METRICS", "SeedRow", "SeedSpread", "parse_seeds", "partial_dir", "plot_spread",
-           "run_seed", "seed_spread", "spread_summary", "summarise"]
+           "run_seed", "seed_line", "seed_spread", "spread_summary", "summarise"]
