@@ -169,13 +169,17 @@ demo-learn: $(STAMP)
 # recordings were not ingested ($(SHARED) absent). demo-report gives every
 # $(DEMO)/runs_real/<x> to the report, which lists recorded-data results first.
 DEMO_REAL_CONFIGS ?= cnn2d_biotac_texture_zscore mlp_biotac_texture_nolevel
+# The smallest of them again at seeds 0-2 (`tactile seed-spread`, one seed after another on
+# one core, in the lane that has time to spare): how much of its figure is the seed.
+DEMO_SPREAD_CONFIG ?= mlp_biotac_texture_nolevel
 demo-real: $(STAMP)
-	rm -rf $(DEMO)/runs_real
+	rm -rf $(DEMO)/runs_real $(DEMO)/spread_real $(DEMO)/.spread_real.seed-spread-partial
 	@if [ ! -f $(DEMO)/h5/biotac_slide20.h5 ]; then echo "(no BioTac recordings: real-data step skipped)"; exit 0; fi; \
 	for m in $(DEMO_REAL_CONFIGS); do \
 	  $(TACTILE) train configs/train_$$m.yaml --data $(DEMO)/h5/biotac_slide20.h5 --cv 2 --out $(DEMO)/runs_real/$$m --no-progress || exit 1; \
 	  $(TACTILE) evaluate $(DEMO)/runs_real/$$m || exit 1; \
-	done
+	done; \
+	$(TACTILE) seed-spread configs/train_$(DEMO_SPREAD_CONFIG).yaml --data $(DEMO)/h5/biotac_slide20.h5 --cv 2 --seeds 0-2 --workers 0 --out $(DEMO)/spread_real --no-progress
 # ---- end of the real-data step ------------------------------------------------------------
 
 # The accelerometer chain of paper 001, small: two short simulated vibro-slip scenes (seed 0
@@ -250,7 +254,7 @@ demo-visuo: $(STAMP)
 # The report: the real-data runs (when there are any) and the simulated ones, every data
 # file, and the figure folders (quick looks of every file, the event chain's figures).
 demo-report: $(STAMP)
-	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --figures $(DEMO)/vibro --figures $(DEMO)/taxel --figures $(DEMO)/visuo/figures --title "tactile demo: where every number comes from" --out $(DEMO)/report
+	$(TACTILE) report $(wildcard $(DEMO)/runs_real/*) $(wildcard $(DEMO)/spread_real) $(DEMO_RUNS) $(wildcard $(DEMO)/runs_accel/*) --data $(DEMO)/h5/*.h5 --figures $(DEMO)/quicklook --figures $(DEMO)/events --figures $(DEMO)/vibro --figures $(DEMO)/taxel --figures $(DEMO)/visuo/figures --title "tactile demo: where every number comes from" --out $(DEMO)/report
 	@echo "report: $(abspath $(DEMO))/report/index.html"
 
 bench: $(STAMP)

@@ -135,11 +135,14 @@ class SeedRow:
     folds: list[dict[str, Any]] = field(default_factory=list)
     wall_time_s: float = 0.0
     resumed: bool = False
+    warnings: list[str] = field(default_factory=list)
+    """The evaluation's notes and warnings (support, fold plan, interleaving, shift)."""
 
     def as_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "run": self.run, **self.metrics,
                 "n_windows": self.n_windows, "n_trials": self.n_trials, "folds": self.folds,
-                "wall_time_s": self.wall_time_s, "resumed": self.resumed}
+                "wall_time_s": self.wall_time_s, "resumed": self.resumed,
+                "warnings": self.warnings}
 
 
 def summarise(rows: Sequence[SeedRow]) -> dict[str, dict[str, float]]:
@@ -262,11 +265,15 @@ def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bo
     head = metrics["heads"][primary]
     folds = [{k: f.get(k) for k in ("fold", "accuracy", "per_trial_accuracy")}
              for f in (metrics.get("cv") or {}).get("folds", [])]
+    from .tables import drift_messages
+
+    warnings = [str(w) for w in (*(metrics.get("notes") or []), *(metrics.get("warnings") or []))]
     return SeedRow(seed=seed, run=str(run),
                    metrics={n: _get(head, p) for n, p in METRICS.items()},
                    n_windows=int(metrics.get("n_windows") or 0),
                    n_trials=int(metrics.get("n_trials") or 0), folds=folds,
-                   wall_time_s=round(wall, 3), resumed=resumed)
+                   wall_time_s=round(wall, 3), resumed=resumed,
+                   warnings=list(dict.fromkeys([*warnings, *drift_messages(metrics)])))
 
 
 def run_seed(spec: dict[str, Any]) -> SeedRow:
@@ -301,6 +308,15 @@ def run_seed(spec: dict[str, Any]) -> SeedRow:
         result = evaluate(run, eval_data, name=EVAL_NAME, latency=False, command=command,
                           overwrite=True, device=device)
     return _row(seed, run, result.as_dict(), time.perf_counter() - started, resumed=trained)
+
+
+def _shared_warnings(rows: Sequence[SeedRow]) -> dict[str, list[int]]:
+    """Each distinct evaluation warning -> the seeds whose evaluation gave it (in order)."""
+    out: dict[str, list[int]] = {}
+    for r in rows:
+        for w in r.warnings:
+            out.setdefault(w, []).append(r.seed)
+    return out
 
 
 def _time_first_seed(run: Path, eval_data: list[Path], cv: int | str | None, device: str,
@@ -408,6 +424,9 @@ def seed_spread(
         result.notes.append(f"data.split is {plan['split']['mode']}: the folds are drawn from "
                             "the seed too, so the spread mixes the training's seed with "
                             "which trials are held out")
+    for text, seeds in _shared_warnings(rows).items():
+        who = "every seed" if len(seeds) == len(rows) else "seed(s) " + ", ".join(map(str, seeds))
+        result.notes.append(f"{who}: {text}")
     if len(rows) < 3:
         result.notes.append(f"{len(rows)} seed(s): too few for an SD to mean much; give 5 or "
                             "more")

@@ -9,9 +9,9 @@ pandas (``pd.DataFrame(t.rows, columns=t.columns)``). Nothing here computes a me
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..text_table import TextTable, num, pct
 
@@ -136,15 +136,20 @@ def drift_lines(result: EvalResult) -> list[str]:
 
 def drift_warnings(result: EvalResult) -> list[str]:
     """The one-line warnings of an evaluation: interleaved trials, shifted channels."""
+    return drift_messages(result.extra)
+
+
+def drift_messages(record: Mapping[str, Any]) -> list[str]:
+    """:func:`drift_warnings` of a metrics.json record (its ``interleaving`` and ``shift``)."""
     from .drift import ChannelShift, Interleaving, ShiftReport
 
     out = []
-    inter = result.extra.get("interleaving")
+    inter = record.get("interleaving")
     if inter:
         message = Interleaving(**{k: v for k, v in inter.items() if k != "folds"}).message()
         if message:
             out.append(message)
-    shift = result.extra.get("shift")
+    shift = record.get("shift")
     if shift and shift.get("flagged"):
         report = ShiftReport(shift["threshold_sd"], shift["n_samples"],
                              [ChannelShift(**c) for c in shift["channels"]])
@@ -250,6 +255,6 @@ def perturbation_blocks(results: Sequence[PerturbResult]) -> list[str | TextTabl
     return blocks
 
 
-__all__ = ["TextTable", "comparison_table", "cost_table", "drift_lines", "drift_warnings",
-           "evaluation_blocks", "num", "pct",
-           "perturbation_blocks", "perturbation_table"]
+__all__ = ["TextTable", "comparison_table", "cost_table", "drift_lines", "drift_messages",
+           "drift_warnings", "evaluation_blocks", "num", "pct", "perturbation_blocks",
+           "perturbation_table"]
