@@ -48,11 +48,19 @@ def info_command(
     stamps), the trials an ingest would make and what it would leave out; other commands
     need it ingested first. A run folder (tactile train's output) is summarised: family,
     input, heads, data and the sensor unit, frame size and px_per_mm it was calibrated
-    on."""
+    on; a seed-spread folder by its config, seeds, protocol and each figure's mean, SD and
+    range over the seeds."""
 
     def body() -> None:
+        from ..learn.seed_spread import is_spread_folder
         from ..learn.sensor_unit import is_run_folder
 
+        if is_spread_folder(file):
+            from ..learn.seed_spread import spread_lines
+
+            record, lines = spread_lines(file)
+            typer.echo(json.dumps(record, indent=2) if as_json else "\n".join(lines))
+            return
         if is_run_folder(file):
             from ..learn.sensor_unit import run_summary
 

@@ -469,6 +469,35 @@ def plot_spread(result: SeedSpread, path: Path) -> Path:
     return save_figure(fig, path, meta=meta, overwrite=True)
 
 
+def is_spread_folder(path: str | Path) -> bool:
+    """Whether ``path`` is a folder ``tactile seed-spread`` wrote (it holds the record)."""
+    return Path(path).is_dir() and (Path(path) / RECORD_JSON).is_file()
+
+
+def spread_lines(path: str | Path) -> tuple[dict[str, Any], list[str]]:
+    """The record of a seed-spread folder and its summary for ``tactile info``: config,
+    seeds, protocol, data, the table (figures in percent) and the notes."""
+    from .compare import read_spread_record
+
+    record = read_spread_record(Path(path) / RECORD_JSON)
+    cv = record.get("cv")
+    split = record.get("split") if isinstance(record.get("split"), dict) else {}
+    how = (f"{cv}-fold cross-validation ({split.get('mode', '?')} split)" if cv not in
+           (None, "loto") else "leave one trial out" if cv == "loto" else "scored on " + ", ".join(
+               str(d.get("path")) for d in record.get("eval_data") or []))
+    lines = [f"{path}: seed spread of {record.get('config')}, seeds "
+             f"{', '.join(map(str, record.get('seeds') or []))}, {how}",
+             "data: " + ", ".join(str(d.get("path")) for d in record.get("data") or []),
+             f"made {record.get('created_utc')} by tactile {record.get('tool_version')}"]
+    summary = record.get("summary") if isinstance(record.get("summary"), dict) else {}
+    for name in (n for n in METRICS if n in summary):
+        st = summary[name]
+        lines.append(f"{LABELS[name]}: mean {100 * st['mean']:.1f} %, SD {100 * st['sd']:.2f} "
+                     f"pp, {100 * st['min']:.1f}-{100 * st['max']:.1f} %")
+    lines += [f"note: {n}" for n in record.get("notes") or []]
+    return record, lines
+
+
 def seed_line(row: SeedRow) -> str:
     """One progress line per finished seed: ``seed 3: window accuracy 61.8 % (22 s)``."""
     acc = row.metrics.get("window_accuracy")
@@ -486,5 +515,6 @@ def spread_summary(result: SeedSpread) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["METRICS", "SeedRow", "SeedSpread", "parse_seeds", "partial_dir", "plot_spread",
+__all__ = ["METRICS", "SeedRow", "SeedSpread", "is_spread_folder", "parse_seeds",
+           "partial_dir", "plot_spread", "spread_lines",
            "run_seed", "seed_line", "seed_spread", "spread_summary", "summarise"]

@@ -278,3 +278,23 @@ def test_each_seeds_evaluation_warnings_reach_the_spread(tmp_path):
     shared = _shared_warnings(rows)
     assert shared["slip: class(es) x have no support"] == [0, 1]
     assert shared["a note"] == [0]
+
+
+def test_info_summarises_a_spread(grouped_spread, tmp_path):
+    config, out, record = grouped_spread
+    res = runner.invoke(app, ["info", str(out)])
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert lines[0] == (f"{out}: seed spread of {config}, seeds 0, 2, 2-fold cross-validation "
+                        "(group split)")
+    s = record["summary"]["window_accuracy"]
+    assert (f"window accuracy: mean {100 * s['mean']:.1f} %, SD {100 * s['sd']:.2f} pp, "
+            f"{100 * s['min']:.1f}-{100 * s['max']:.1f} %") in lines
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "seed_spread.json").write_text("{not json")
+    res = runner.invoke(app, ["info", str(broken)])
+    assert res.exit_code == 2
+    assert res.output.strip() == (f"tactile: error: {broken / 'seed_spread.json'}: not a "
+                                  "readable seed-spread record (JSONDecodeError); re-create it "
+                                  "with `tactile seed-spread`")
