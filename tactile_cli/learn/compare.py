@@ -469,9 +469,9 @@ def read_spread_record(record: Path) -> dict[str, Any]:
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(f"not a readable seed-spread record ({exc.__class__.__name__}); "
                          "re-create it with `tactile seed-spread`", path=record) from None
-    if not isinstance(data, dict):
-        raise InputError("not a seed-spread record (not a JSON object); re-create it with "
-                         "`tactile seed-spread`", path=record)
+    if not isinstance(data, dict) or data.get("format") != "tactile-seed-spread":
+        raise InputError("not a seed-spread record (format tactile-seed-spread); re-create it "
+                         "with `tactile seed-spread`", path=record)
     return data
 
 

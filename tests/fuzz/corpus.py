@@ -157,6 +157,9 @@ def build_bases(root: Path) -> Path:
               "--out", str(base / "run"), "--no-progress"], base)
     _tactile(["evaluate", str(base / "run"), "--data", str(h5 / "counts.h5"),
               "--no-latency", "--name", "counts"], base)
+    _tactile(["seed-spread", str(cfg / "train.yaml"), "--data", str(h5 / "counts.h5"),
+              "--cv", "2", "--seeds", "0,1", "--workers", "0", "--out", str(base / "spread"),
+              "--no-progress", "--no-plot"], base)
     from .chains import build_chain_bases
 
     build_chain_bases(base, _tactile, REPO)
@@ -1044,6 +1047,27 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
             reads = command in ("evaluate", "perturb") or target.startswith(("run", "eval"))
             reads = reads and target not in ("curves.png", "history.csv", "split.csv")
             case(d, command, argv, REFUSE if reads else EITHER)
+
+    # a damaged seed-spread folder: its record, or a seed's run gone (kind "run": no new
+    # kind for the fast subset; `info` reads the record alone)
+    spread = base / "spread"
+    for mutation, target, apply in [
+            ("seed_spread.json-cut", "seed_spread.json", _truncate_text),
+            ("seed_spread.json-empty-object", "seed_spread.json", lambda p: p.write_text("{}")),
+            ("seed_spread.json-list", "seed_spread.json", lambda p: p.write_text("[1, 2]")),
+            ("seed_spread.json-drop-key", "seed_spread.json", _json_drop_key),
+            ("seed_spread.json-non-utf8", "seed_spread.json",
+             lambda p: p.write_bytes(NON_UTF8)),
+            ("spread-seed-run-missing", "seed_1", lambda p: shutil.rmtree(p))]:
+        d = add("run", spread, f"spread/{target}", mutation, "run", apply)
+        d.entry = "spread"
+        record_damaged = target == "seed_spread.json" and not mutation.endswith("drop-key")
+        for command, argv in [
+                ("info", ["info", "{IN}"]),
+                ("compare", ["compare", "{IN}", "--json"]),
+                ("report", ["report", "{IN}", "--out", "{OUT}/report"])]:
+            refuse = record_damaged or (target == "seed_1" and command != "info")
+            case(d, command, argv, REFUSE if refuse else EITHER)
 
     # clashing outputs: a file where a folder is expected and the reverse (valid inputs)
     ev = "{BASE}/h5/events.h5"
