@@ -52,10 +52,12 @@ from ..input_guard import check_outputs
 from ..store.atomic import save_figure, swap_into_place, write_json, write_text
 from ..store.outdir import check_output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
+from . import runs
 from .compare import SPREAD_EVAL, SPREAD_JSON
 
 if TYPE_CHECKING:
     from ..batch import BatchCounts
+    from .metrics import EvalResult
 
 #: metric name -> where it is in the primary head of metrics.json
 METRICS: dict[str, tuple[str, ...]] = {
@@ -258,6 +260,9 @@ def _start(out: Path, plan: dict[str, Any], overwrite: bool) -> tuple[Path, bool
 
 
 def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bool) -> SeedRow:
+    """A seed's row from its evaluation's metrics.json record."""
+    from .tables import drift_messages
+
     primary = metrics.get("primary_head")
     if primary is None:
         raise InputError("the config has no classification head; a seed spread reports "
@@ -265,8 +270,6 @@ def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bo
     head = metrics["heads"][primary]
     folds = [{k: f.get(k) for k in ("fold", "accuracy", "per_trial_accuracy")}
              for f in (metrics.get("cv") or {}).get("folds", [])]
-    from .tables import drift_messages
-
     warnings = [str(w) for w in (*(metrics.get("notes") or []), *(metrics.get("warnings") or []))]
     return SeedRow(seed=seed, run=str(run),
                    metrics={n: _get(head, p) for n, p in METRICS.items()},
@@ -276,37 +279,58 @@ def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bo
                    warnings=list(dict.fromkeys([*warnings, *drift_messages(metrics)])))
 
 
+def _metrics_path(run: Path) -> Path:
+    return run / runs.EVAL_DIR / EVAL_NAME / runs.METRICS_JSON
+
+
+def _read_own_metrics(run: Path) -> dict[str, Any]:
+    """A seed's evaluation record, which this spread wrote and may write again (its latency
+    is added at the end): checked like ``tactile evaluate``'s, but not read as an input
+    (:func:`.runs.read_metrics` would protect it from that rewrite)."""
+    path = _metrics_path(run)
+    redo = "delete the seed's folder and run the spread again"
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        raise InputError(f"not a readable evaluation record; {redo}", path=path) from None
+    return runs.checked_record(record, path, fmt=runs.EVAL_FORMAT,
+                               version=runs.EVAL_FORMAT_VERSION, redo=redo)
+
+
+def _evaluate(run: Path, eval_data: list[Path], cv: int | str | None, *, latency: bool,
+              device: str, command: str) -> EvalResult:
+    """``run``'s evaluation ``seed_spread``: its held-out folds, or ``eval_data``."""
+    from .cv import evaluate_cv
+    from .evaluate import evaluate
+
+    if cv is not None:
+        return evaluate_cv(run, None, name=EVAL_NAME, latency=latency, command=command,
+                           overwrite=True, device=device)
+    return evaluate(run, eval_data, name=EVAL_NAME, latency=latency, command=command,
+                    overwrite=True, device=device)
+
+
 def run_seed(spec: dict[str, Any]) -> SeedRow:
     """One seed, where the batch runs it (a module-level task of :func:`.batch.map_tasks`):
     train ``spec["config"]`` at ``spec["seed"]`` into ``OUT/seed_S`` (a stopped
     cross-validation resumes its folds) and evaluate it, or read back an evaluation that
-    exists. ``spec`` holds paths as text and plain values."""
-    from .cv import evaluate_cv
-    from .evaluate import evaluate
+    exists (a stopped spread of the same plan). ``spec`` holds paths as text and plain
+    values."""
     from .pipeline import train_run
 
-    seed, cv, epochs, overwrite = spec["seed"], spec["cv"], spec["epochs"], spec["overwrite"]
-    device, command = spec["device"], spec["command"]
-    config, data = Path(spec["config"]), [Path(p) for p in spec["data"]]
+    seed, cv, device, command = spec["seed"], spec["cv"], spec["device"], spec["command"]
     eval_data = [Path(p) for p in spec["eval_data"]]
-    split_from = None if spec["split_from"] is None else Path(spec["split_from"])
     run = Path(spec["out"]) / f"seed_{seed}"
-    metrics_path = run / "eval" / EVAL_NAME / "metrics.json"
-    if metrics_path.is_file() and not overwrite:
-        metrics = json.loads(metrics_path.read_text(encoding="utf-8"))
-        return _row(seed, run, metrics, 0.0, resumed=True)
+    if _metrics_path(run).is_file():
+        return _row(seed, run, _read_own_metrics(run), 0.0, resumed=True)
     started = time.perf_counter()
-    trained = (run / "run.json").is_file() and not overwrite
-    if not trained:
-        train_run(config, data, out=run, seed=seed, epochs=epochs, cv=cv, jobs=1,
-                  split_from=split_from, overwrite=overwrite or cv is None, command=command,
-                  device=device)
-    if cv is not None:
-        result = evaluate_cv(run, None, name=EVAL_NAME, latency=False, command=command,
-                             overwrite=True, device=device)
-    else:
-        result = evaluate(run, eval_data, name=EVAL_NAME, latency=False, command=command,
-                          overwrite=True, device=device)
+    trained = (run / runs.RUN_JSON).is_file()
+    if not trained:  # a single run left half-written is replaced; a cv run resumes its folds
+        train_run(Path(spec["config"]), [Path(p) for p in spec["data"]], out=run, seed=seed,
+                  epochs=spec["epochs"], cv=cv, jobs=1,
+                  split_from=None if spec["split_from"] is None else Path(spec["split_from"]),
+                  overwrite=cv is None, command=command, device=device)
+    result = _evaluate(run, eval_data, cv, latency=False, device=device, command=command)
     return _row(seed, run, result.as_dict(), time.perf_counter() - started, resumed=trained)
 
 
@@ -323,18 +347,8 @@ def _time_first_seed(run: Path, eval_data: list[Path], cv: int | str | None, dev
                      command: str) -> None:
     """Evaluate ``run`` again with its latency measured, unless its evaluation has one (the
     figures are the same: the same model on the same trials)."""
-    from .cv import evaluate_cv
-    from .evaluate import evaluate
-
-    path = run / "eval" / EVAL_NAME / "metrics.json"
-    if json.loads(path.read_text(encoding="utf-8")).get("latency"):
-        return
-    if cv is not None:
-        evaluate_cv(run, None, name=EVAL_NAME, latency=True, command=command, overwrite=True,
-                    device=device)
-    else:
-        evaluate(run, eval_data, name=EVAL_NAME, latency=True, command=command,
-                 overwrite=True, device=device)
+    if not _read_own_metrics(run).get("latency"):
+        _evaluate(run, eval_data, cv, latency=True, device=device, command=command)
 
 
 def seed_spread(
@@ -398,7 +412,7 @@ def seed_spread(
     specs = [{"seed": seed, "config": str(config), "data": [str(p) for p in data],
               "eval_data": [str(p) for p in evals], "cv": cv, "epochs": epochs,
               "split_from": None if split is None else str(split), "out": str(work),
-              "overwrite": False, "device": device, "command": command}
+              "device": device, "command": command}
              for seed in seed_list]
     rows: list[SeedRow] = []
     failed: list[tuple[int, str]] = []

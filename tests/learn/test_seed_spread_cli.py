@@ -298,3 +298,23 @@ def test_info_summarises_a_spread(grouped_spread, tmp_path):
     assert res.output.strip() == (f"tactile: error: {broken / 'seed_spread.json'}: not a "
                                   "readable seed-spread record (JSONDecodeError); re-create it "
                                   "with `tactile seed-spread`")
+
+
+def test_a_damaged_evaluation_in_a_stopped_spread_is_one_line(grouped_spread, action_file,
+                                                              tmp_path):
+    config, _, _ = grouped_spread
+    out = tmp_path / "s"
+
+    def stop(row):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        seed_spread(config, [action_file], out=out, seeds=[0, 2], cv=2, workers=0,
+                    on_seed=stop)
+    metrics = partial_dir(out) / "seed_0" / "eval" / "seed_spread" / "metrics.json"
+    metrics.write_text(metrics.read_text()[:50])
+    res = _spread(config, "--data", action_file, "--cv", "2", "--seeds", "0,2", "--out", out)
+    assert res.exit_code == 2
+    assert res.output.strip().splitlines()[-1] == (
+        f"tactile: error: seed 0: {metrics}: not a readable evaluation record; delete the "
+        "seed's folder and run the spread again")
