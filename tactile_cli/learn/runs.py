@@ -32,10 +32,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import torch
 
 from .._version import __version__
 from ..config_file import missing_file_error, parse_yaml, read_text
@@ -47,7 +46,9 @@ from .config import CLASSIC_FAMILIES, TrainConfig, parse_config
 from .data import Normalisation
 from .heads import HeadSpec
 from .inputs import InputSpec
-from .models import MultiTaskNet, build_model
+
+if TYPE_CHECKING:  # torch is imported where a model is loaded: reading a run's records
+    from .models import MultiTaskNet  # (info, compare, report) does not need it
 
 RUN_FORMAT = "tactile-run"
 RUN_FORMAT_VERSION = 1
@@ -130,6 +131,10 @@ class Run:
             from .classic import load_classic
 
             return load_classic(self)  # type: ignore[return-value]
+        import torch
+
+        from .models import build_model
+
         d = self.config.data
         model = build_model(self.config.model, window=d.window, n_channels=len(d.channels),
                             heads=self.heads, frames=d.frames)
@@ -399,6 +404,19 @@ def read_metrics(path: str | Path) -> dict[str, Any]:
     return m
 
 
+def name_final_run(run_dir: Path, eval_name: str, final: Path) -> str:
+    """Make the evaluation ``RUN/eval/<eval_name>/metrics.json`` of a run built in a partial
+    folder (a seed spread, a sweep replacing an earlier one) name ``final``, the path the run
+    will have once that folder is renamed into place, not the partial path that is gone
+    after it (written atomically, before the rename). Returns ``str(final)``."""
+    metrics = run_dir / EVAL_DIR / eval_name / METRICS_JSON
+    record = json.loads(metrics.read_text(encoding="utf-8"))
+    if record.get("run") != str(final):
+        record["run"] = str(final)
+        write_json(metrics, record, overwrite=True)
+    return str(final)
+
+
 def _number_or_null(v: Any) -> bool:
     return v is None or (isinstance(v, int | float) and not isinstance(v, bool)
                          and not (isinstance(v, float) and math.isinf(v)))
@@ -482,4 +500,5 @@ __all__ = ["CONFIG_YAML", "CURVES_PNG", "EVAL_DIR", "EVAL_FORMAT", "EVAL_FORMAT_
            "RUN_FORMAT", "RUN_FORMAT_VERSION", "RUN_JSON", "SPLIT_CSV", "Run", "checked_record",
            "dumps",
            "eval_dir_name", "json_safe", "load_run", "read_metrics", "read_run_config",
-           "check_result_name", "read_run_info", "run_files", "write_folder", "write_json"]
+           "check_result_name", "name_final_run", "read_run_info", "run_files", "write_folder",
+           "write_json"]
