@@ -445,7 +445,8 @@ def seed_spread(
         result.notes.append(f"{len(rows)} seed(s): too few for an SD to mean much; give 5 or "
                             "more")
     for row in rows:  # where each run will be once the spread is in place
-        row.run = str(out / Path(row.run).name)
+        name = Path(row.run).name
+        row.run = runs.name_final_run(work / name, EVAL_NAME, out / name)
     write_text(work / TABLE_MD, result.table() + "\n", overwrite=True)
     if plot:
         plot_spread(result, work / FIGURE_PNG)

@@ -645,6 +645,11 @@ def run_sweep(
     except BaseException:
         _remove_task_leftovers(work, [r.name for r in todo], eval_name)
         raise
+    if work != out:  # each evaluation names where its run will be after the swap
+        for run in planned:
+            run_dir = work / RUNS_DIR / run.name
+            if (run_dir / runs.EVAL_DIR / eval_name / runs.METRICS_JSON).is_file():
+                runs.name_final_run(run_dir, eval_name, out.resolve() / RUNS_DIR / run.name)
     result = collect(config, planned, work, heads=heads, score_head=score_head,
                      eval_name=eval_name, errors=errors, where=where, command=command,
                      plan=plan, started=started, out_dir=out)

@@ -70,6 +70,10 @@ def test_each_seed_is_the_run_that_train_and_evaluate_make(grouped_spread, actio
     assert "| spread |" in (out / "seed_spread.md").read_text()
     assert (out / "seed_spread.png").read_bytes()[:4] == b"\x89PNG"
     assert (out / "seed_0" / "run.json").is_file()
+    for row in record["by_seed"]:  # each seed's evaluation names where its run is now
+        metrics = json.loads((out / f"seed_{row['seed']}" / "eval" / "seed_spread" /
+                              "metrics.json").read_text())
+        assert metrics["run"] == row["run"] == str(out / f"seed_{row['seed']}")
 
 
 def test_a_finished_spread_is_kept_and_a_stopped_one_resumes(grouped_spread, action_file,

@@ -275,6 +275,8 @@ def test_an_interrupted_overwrite_keeps_the_earlier_sweep_and_a_restart_resumes(
     assert not partial.exists() and _tree(out) != before
     assert json.loads((out / "sweep_results.json").read_text())["out_dir"] == str(out)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sw", "sweep.yaml"]
+    metrics = next((out / "runs" / "fnn-w50-Lx" / "eval").glob("*/metrics.json"))
+    assert json.loads(metrics.read_text())["run"] == str((out / "runs" / "fnn-w50-Lx").resolve())
 
 
 @pytest.mark.slow
