@@ -137,7 +137,11 @@ demo-events-figures: $(STAMP)
 # Each model is exported to ONNX (demo_out/exported/) and evaluated with the exported file
 # checked against it and timed beside PyTorch. Then compared by accuracy and cost (torch and
 # exported latency), and perturbed. Needs demo-events first.
+# The temporal LSTM trains 20 epochs here instead of its config's 40 (cosine schedule over
+# 20): half the demo's longest step (55 -> 27 s on 2 cores); on scene_test it scored 99.6 %
+# against 99.5 % at 40 epochs (same validation accuracy, 99.47 %).
 DEMO_FAMILIES := lstm cnn1d fnn mlp
+DEMO_LSTM_EPOCHS ?= 20
 DEMO_RUNS := $(foreach m,$(DEMO_FAMILIES),$(DEMO)/runs/$(m)) $(DEMO)/runs/lstm_spatial
 demo-learn: $(STAMP)
 	rm -rf $(DEMO)/runs $(DEMO)/scene_test $(DEMO)/exported
@@ -146,7 +150,8 @@ demo-learn: $(STAMP)
 	$(TACTILE) ingest $(DEMO)/scene_test/*.npy --width 640 --height 480 --annotations $(DEMO)/scene_test/annotations.csv --trial-labels $(DEMO)/scene_test/trials.csv --out $(DEMO)/h5/scene_test.h5 --overwrite --no-progress
 	$(TACTILE) centroids $(DEMO)/h5/scene_test.h5 --rois $(DEMO)/scene_test/scene.json --out $(DEMO)/h5/scene_test_centroids.h5 --overwrite --no-progress
 	for m in $(DEMO_FAMILIES); do \
-	  $(TACTILE) train configs/train_$${m}_actions.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/$$m --no-progress || exit 1; \
+	  epochs=""; if [ $$m = lstm ]; then epochs="--epochs $(DEMO_LSTM_EPOCHS)"; fi; \
+	  $(TACTILE) train configs/train_$${m}_actions.yaml --data $(DEMO)/h5/synth_train.h5 --out $(DEMO)/runs/$$m $$epochs --no-progress || exit 1; \
 	  $(TACTILE) export $(DEMO)/runs/$$m --out $(DEMO)/exported/$$m.onnx --overwrite || exit 1; \
 	  $(TACTILE) evaluate $(DEMO)/runs/$$m --data $(DEMO)/h5/scene_test.h5 --exported $(DEMO)/exported/$$m.onnx || exit 1; \
 	done
