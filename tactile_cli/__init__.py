@@ -85,6 +85,8 @@ _VERBS = {
     "perturb_evaluate": "learn.perturb",
     "perturb_runs": "learn.perturb",
     "run_sweep": "learn.sweep",
+    "seed_spread": "learn.seed_spread",
+    "evaluate_spread": "learn.spread_eval",
     "build_report": "learn.report",
     "quicklook": "plots.quicklook",
     "write_quicklook": "plots.quicklook",

@@ -1,4 +1,4 @@
-"""`tactile evaluate RUN --data FILE... [--split test|all] [--json]`"""
+"""`tactile evaluate RUN --data FILE... [--split test|all] [--json]`; RUN may be a seed spread."""
 
 from __future__ import annotations
 
@@ -25,8 +25,10 @@ FLAGS: dict[str, Flag] = {
 
 def evaluate_command(
     ctx: typer.Context,
-    run: Annotated[Path, typer.Argument(help="Run folder written by `tactile train`.",
-                                        show_default=False, metavar="RUN")],
+    run: Annotated[Path, typer.Argument(
+        help="Run folder written by `tactile train`, or a folder of `tactile seed-spread` made "
+        "with --eval-data: every seed's model is scored on --data, with the seeds' spread.",
+        show_default=False, metavar="RUN")],
     data: Annotated[list[Path] | None, typer.Option(
         "--data", "-d", help="Tactile HDF5 file(s) to evaluate on; repeat the option or list "
         "several files after it. A cross-validated run (train --cv) needs none: each fold is "
@@ -76,8 +78,17 @@ def evaluate_command(
 
     def body() -> None:
         from ..learn.pipeline import evaluate_run
+        from ..learn.seed_spread import is_spread_folder
 
         files = data_files(data, ctx)
+        if is_spread_folder(run):
+            _evaluate_spread(run, files, split=split, name=name, threads=threads,
+                             latency=latency, overwrite=overwrite, as_json=as_json,
+                             device=device, shift_threshold=shift_threshold, others={
+                                 "--each": each or None, "--perturb": perturb or None,
+                                 "--exported": exported, "--scheduler": scheduler,
+                                 "--workers": workers})
+            return
         if each:
             _evaluate_each(run, files, split=split, overwrite=overwrite, as_json=as_json,
                            scheduler=scheduler, workers=workers, others={
@@ -102,6 +113,25 @@ def evaluate_command(
         warn(result.warnings)
 
     run_guarded(body, flags=FLAGS)
+
+
+def _evaluate_spread(spread: Path, files: list[Path], *, split: str, name: str | None,
+                     threads: int, latency: bool, overwrite: bool, as_json: bool, device: str,
+                     shift_threshold: float, others: dict[str, Any]) -> None:
+    """A seed-spread folder: every seed's model scored on ``files``, the seeds' spread."""
+    from ..learn.spread_eval import evaluate_spread, spread_eval_summary
+
+    for flag, value in others.items():
+        if value is not None:
+            raise InputError(f"{flag} goes with a run folder, not a seed spread", path=spread)
+    result = evaluate_spread(spread, files, name=name, split=split, latency=latency,
+                             threads=threads, overwrite=overwrite, device=device,
+                             shift_threshold_sd=shift_threshold)
+    if as_json:
+        echo_json(result.as_dict())
+    else:
+        print(spread_eval_summary(result))
+    warn(result.notes)
 
 
 def _evaluate_each(run: Path, files: list[Path], *, split: str, overwrite: bool, as_json: bool,

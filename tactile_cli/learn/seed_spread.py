@@ -259,7 +259,8 @@ def _start(out: Path, plan: dict[str, Any], overwrite: bool) -> tuple[Path, bool
     return work, made
 
 
-def _row(seed: int, run: Path, metrics: dict[str, Any], wall: float, resumed: bool) -> SeedRow:
+def seed_row(seed: int, run: Path, metrics: dict[str, Any], wall: float,
+             resumed: bool) -> SeedRow:
     """A seed's row from its evaluation's metrics.json record."""
     from .tables import drift_messages
 
@@ -322,7 +323,7 @@ def run_seed(spec: dict[str, Any]) -> SeedRow:
     eval_data = [Path(p) for p in spec["eval_data"]]
     run = Path(spec["out"]) / f"seed_{seed}"
     if _metrics_path(run).is_file():
-        return _row(seed, run, _read_own_metrics(run), 0.0, resumed=True)
+        return seed_row(seed, run, _read_own_metrics(run), 0.0, resumed=True)
     started = time.perf_counter()
     trained = (run / runs.RUN_JSON).is_file()
     if not trained:  # a single run left half-written is replaced; a cv run resumes its folds
@@ -331,10 +332,10 @@ def run_seed(spec: dict[str, Any]) -> SeedRow:
                   split_from=None if spec["split_from"] is None else Path(spec["split_from"]),
                   overwrite=cv is None, command=command, device=device)
     result = _evaluate(run, eval_data, cv, latency=False, device=device, command=command)
-    return _row(seed, run, result.as_dict(), time.perf_counter() - started, resumed=trained)
+    return seed_row(seed, run, result.as_dict(), time.perf_counter() - started, resumed=trained)
 
 
-def _shared_warnings(rows: Sequence[SeedRow]) -> dict[str, list[int]]:
+def shared_warnings(rows: Sequence[SeedRow]) -> dict[str, list[int]]:
     """Each distinct evaluation warning -> the seeds whose evaluation gave it (in order)."""
     out: dict[str, list[int]] = {}
     for r in rows:
@@ -438,7 +439,7 @@ def seed_spread(
         result.notes.append(f"data.split is {plan['split']['mode']}: the folds are drawn from "
                             "the seed too, so the spread mixes the training's seed with "
                             "which trials are held out")
-    for text, seeds in _shared_warnings(rows).items():
+    for text, seeds in shared_warnings(rows).items():
         who = "every seed" if len(seeds) == len(rows) else "seed(s) " + ", ".join(map(str, seeds))
         result.notes.append(f"{who}: {text}")
     if len(rows) < 3:
@@ -510,6 +511,15 @@ def spread_lines(path: str | Path) -> tuple[dict[str, Any], list[str]]:
         lines.append(f"{LABELS[name]}: mean {100 * st['mean']:.1f} %, SD {100 * st['sd']:.2f} "
                      f"pp, {100 * st['min']:.1f}-{100 * st['max']:.1f} %")
     lines += [f"note: {n}" for n in record.get("notes") or []]
+    from .spread_eval import spread_evaluations
+
+    for ev in spread_evaluations(Path(path)):  # `tactile evaluate SPREAD --data FILE`
+        if "unreadable" in ev:
+            lines.append(f"evaluation {ev['name']}: unreadable ({ev['unreadable']})")
+            continue
+        files = ", ".join(str(d.get("path")) for d in ev.get("data") or [])
+        lines.append(f"evaluation {ev.get('name')} on {files}:")
+        lines += [f"  {line}" for line in ev.get("against_own") or []]
     return record, lines
 
 
@@ -532,4 +542,5 @@ def spread_summary(result: SeedSpread) -> str:
 
 __all__ = ["METRICS", "SeedRow", "SeedSpread", "is_spread_folder", "parse_seeds",
            "partial_dir", "plot_spread", "spread_lines",
-           "run_seed", "seed_line", "seed_spread", "spread_summary", "summarise"]
+           "run_seed", "seed_line", "seed_row", "seed_spread", "shared_warnings",
+           "spread_summary", "summarise"]

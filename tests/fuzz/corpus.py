@@ -1065,8 +1065,12 @@ def build_corpus(root: Path, *, seed: int = 0, n_random: int = 4) -> Corpus:
         for command, argv in [
                 ("info", ["info", "{IN}"]),
                 ("compare", ["compare", "{IN}", "--json"]),
-                ("report", ["report", "{IN}", "--out", "{OUT}/report"])]:
-            refuse = record_damaged or (target == "seed_1" and command != "info")
+                ("report", ["report", "{IN}", "--out", "{OUT}/report"]),
+                # a spread scored on other data: this one is cross-validated (refused too)
+                ("evaluate", ["evaluate", "{IN}", "--data", "{BASE}/h5/counts.h5", "--name",
+                              "x", "--no-latency"])]:
+            refuse = record_damaged or command == "evaluate" or (
+                target == "seed_1" and command != "info")
             case(d, command, argv, REFUSE if refuse else EITHER)
 
     # clashing outputs: a file where a folder is expected and the reverse (valid inputs)

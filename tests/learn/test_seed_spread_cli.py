@@ -265,7 +265,7 @@ def test_compare_puts_a_spread_beside_a_plain_run_of_the_same_data(grouped_sprea
 def test_each_seeds_evaluation_warnings_reach_the_spread(tmp_path):
     """Nothing dropped: a seed's notes, warnings and interleaving message are its row's
     warnings, and the spread names which seeds gave each."""
-    from tactile_cli.learn.seed_spread import _row, _shared_warnings
+    from tactile_cli.learn.seed_spread import seed_row, shared_warnings
 
     inter = {"order_by": "time_origin_unix_s", "n_evaluated": 20, "n_inside_span": 4,
              "class_label": None, "n_inside_class_span": None, "interleaved": True,
@@ -273,13 +273,13 @@ def test_each_seeds_evaluation_warnings_reach_the_spread(tmp_path):
     metrics = {"primary_head": "slip", "heads": {"slip": {"accuracy": 0.75, "macro_f1": 0.7}},
                "n_windows": 80, "n_trials": 20, "notes": ["a note"],
                "warnings": ["slip: class(es) x have no support"], "interleaving": inter}
-    rows = [_row(0, tmp_path / "seed_0", metrics, 1.0, False),
-            _row(1, tmp_path / "seed_1", {**metrics, "notes": [], "interleaving": None}, 1.0,
+    rows = [seed_row(0, tmp_path / "seed_0", metrics, 1.0, False),
+            seed_row(1, tmp_path / "seed_1", {**metrics, "notes": [], "interleaving": None}, 1.0,
                  False)]
     assert rows[0].warnings[:2] == ["a note", "slip: class(es) x have no support"]
     assert rows[0].warnings[2].startswith("4 of 20 evaluated trial(s) lie inside the "
                                           "recording span (by time_origin_unix_s)")
-    shared = _shared_warnings(rows)
+    shared = shared_warnings(rows)
     assert shared["slip: class(es) x have no support"] == [0, 1]
     assert shared["a note"] == [0]
 

@@ -1,0 +1,116 @@
+"""`tactile evaluate SPREAD --data FILE`: every seed's model of a seed spread scored on
+recordings the spread never saw, each seed's figures the ones `tactile evaluate` gives, the
+seeds' spread beside the spread's own figures (:mod:`tactile_cli.learn.spread_eval`)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from tactile_cli.cli import app
+
+from ..factories.action_files import make_action_file
+from .conftest import tiny_config
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def spread(action_file, heldout_file, tmp_path_factory):
+    """A 2-seed spread without cv (scored on ``heldout_file``) and a later session."""
+    root = tmp_path_factory.mktemp("spread_eval")
+    config = root / "tiny.yaml"
+    config.write_text(tiny_config(data={"split": {"val_fraction": 0.0, "test_fraction": 0.0}},
+                                  optim={"epochs": 2}).as_yaml())
+    out = root / "spread"
+    res = runner.invoke(app, ["seed-spread", str(config), "--data", str(action_file),
+                              "--eval-data", str(heldout_file), "--seeds", "0,1", "--out",
+                              str(out), "--workers", "0", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    later = make_action_file(root / "later.h5", n_trials=8, seed=11)
+    return config, out, later
+
+
+def test_each_seed_is_scored_as_evaluate_scores_it(spread, tmp_path):
+    config, out, later = spread
+    res = runner.invoke(app, ["evaluate", str(out), "--data", str(later), "--json"])
+    assert res.exit_code == 0, res.output
+    record = json.loads(res.stdout)
+    assert record["format"] == "tactile-seed-spread-eval" and record["name"] == "later"
+    assert record["seeds"] == [0, 1] and record["data"][0]["path"] == str(later)
+    assert record["spread_sha256"] and record["command"] and record["tool_version"]
+    for row in record["by_seed"]:  # the figures of `tactile evaluate SEED_RUN --data later`
+        metrics = json.loads((out / f"seed_{row['seed']}" / "eval" / "later" /
+                              "metrics.json").read_text())
+        head = metrics["heads"][metrics["primary_head"]]
+        assert row["window_accuracy"] == head["accuracy"]
+        assert row["n_trials"] == metrics["n_trials"] == 8
+    first, second = (json.loads((out / f"seed_{s}" / "eval" / "later" / "metrics.json")
+                                .read_text()) for s in (0, 1))
+    assert first["latency"] and not second["latency"]  # the first seed's model is timed
+    acc = [r["window_accuracy"] for r in record["by_seed"]]
+    assert record["summary"]["window_accuracy"]["mean"] == pytest.approx(sum(acc) / 2)
+    own = json.loads((out / "seed_spread.json").read_text())["summary"]
+    assert record["spread_summary"] == own
+    line = record["against_own"][0]
+    assert line.startswith(f"window accuracy: {100 * own['window_accuracy']['mean']:.1f} % "
+                           "on the spread's own evaluation, ")
+    written = out / "eval" / "later"
+    assert sorted(p.name for p in written.iterdir()) == ["spread_eval.json", "spread_eval.md",
+                                                          "spread_eval.png"]
+    assert "own evaluation" in (written / "spread_eval.md").read_text()
+    assert "own evaluation" in runner.invoke(app, ["info", str(out)]).stdout
+    # compare ranks the spread on that evaluation
+    res = runner.invoke(app, ["compare", str(out), "--data-name", "later", "--json"])
+    assert res.exit_code == 0, res.output
+    point = json.loads(res.stdout)["runs"][0]
+    assert point["score"] == pytest.approx(sum(acc) / 2) and point["seeds"]["scores"] == acc
+    metrics = json.loads((out / "seed_0" / "eval" / "later" / "metrics.json").read_text())
+    assert point["latency_ms"] == metrics["latency"]["batch1_ms_median"] > 0
+
+
+def test_again_is_refused_resumed_or_replaced(spread):
+    _, out, later = spread
+    argv = ["evaluate", str(out), "--data", str(later), "--name", "again", "--no-latency"]
+    assert runner.invoke(app, argv).exit_code == 0
+    res = runner.invoke(app, argv)
+    assert res.exit_code == 2
+    assert res.stderr.strip().endswith("again: evaluation folder exists; pass --overwrite to "
+                                       "replace it or give another --name")
+    # a stopped call (the seeds scored, the summary not written) reads the seeds back
+    import shutil
+
+    shutil.rmtree(out / "eval" / "again")
+    res = runner.invoke(app, [*argv, "--json"])
+    assert res.exit_code == 0, res.output
+    assert [r["resumed"] for r in json.loads(res.stdout)["by_seed"]] == [True, True]
+    res = runner.invoke(app, [*argv, "--overwrite", "--json"])
+    assert [r["resumed"] for r in json.loads(res.stdout)["by_seed"]] == [False, False]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--each"], "--each goes with a run folder, not a seed spread"),
+    (["--perturb"], "--perturb goes with a run folder, not a seed spread"),
+    (["--name", "seed_spread"], "the evaluation name 'seed_spread' is the spread's own"),
+    (["--name", "../x"], "--name (='../x') must be a plain folder name"),
+])
+def test_what_a_spread_does_not_take_is_one_line(spread, extra, message):
+    _, out, later = spread
+    res = runner.invoke(app, ["evaluate", str(out), "--data", str(later), *extra])
+    assert res.exit_code == 2 and message in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_a_cross_validated_spread_and_no_data_are_one_line(spread, action_file, tmp_path):
+    config, out, _ = spread
+    res = runner.invoke(app, ["evaluate", str(out)])
+    assert res.exit_code == 2 and "no data files; give --data FILE..." in res.stderr
+    cv = tmp_path / "cv"
+    assert runner.invoke(app, ["seed-spread", str(config), "--data", str(action_file),
+                               "--cv", "2", "--seeds", "0", "--out", str(cv), "--workers",
+                               "0", "--no-plot"]).exit_code == 0
+    res = runner.invoke(app, ["evaluate", str(cv), "--data", str(action_file)])
+    assert res.exit_code == 2 and "a cross-validated spread is scored on its held-out folds" \
+        in res.stderr and "`tactile seed-spread --eval-data FILE` (no --cv)" in res.stderr
