@@ -64,15 +64,20 @@ def _same_data(metrics_path: Path, paths: Sequence[Path], split: str) -> bool:
         return False
 
 
-def own_figures_notes(own: dict[str, Any], here: dict[str, dict[str, float]]) -> list[str]:
+def own_figures_notes(own: dict[str, Any], here: dict[str, dict[str, float]],
+                      n_trials: int | None = None) -> list[str]:
     """Per metric both summaries have: the spread's own mean against this evaluation's, and
-    whether the change is larger than the seeds' SD there."""
+    whether the change is larger than the seeds' SD there (the larger of the two SDs). A
+    per-trial figure also says how much one of the ``n_trials`` trials weighs: a change of
+    a trial or two is within what the trials drawn can give (see each seed's interval)."""
     notes = []
     for name in (n for n in METRICS if n in here and isinstance(own.get(n), dict)):
         a, b = own[name], here[name]
         delta = 100 * (b["mean"] - a["mean"])
         sd = 100 * max(a.get("sd", 0.0), b["sd"])
         size = ("larger than" if abs(delta) > sd else "within") + f" one seed SD, {sd:.2f} pp"
+        if name.startswith("trial_") and n_trials:
+            size += f"; one of the {n_trials} trials is {100 / n_trials:.1f} pp"
         notes.append(f"{LABELS[name]}: {100 * a['mean']:.1f} % on the spread's own evaluation, "
                      f"{100 * b['mean']:.1f} % here ({delta:+.1f} pp; {size})")
     return notes
@@ -166,7 +171,8 @@ def evaluate_spread(
     for text, seeds in shared_warnings(rows).items():
         who = "every seed" if len(seeds) == len(rows) else "seed(s) " + ", ".join(map(str, seeds))
         result.notes.append(f"{who}: {text}")
-    plan["against_own"] = own_figures_notes(plan["spread_summary"], summary)
+    plan["against_own"] = own_figures_notes(plan["spread_summary"], summary,
+                                            rows[0].n_trials if rows else None)
     if len(rows) < 3:
         result.notes.append(f"{len(rows)} seed(s): too few for an SD to mean much")
     with output_folder(out_dir, overwrite=True) as tmp:
