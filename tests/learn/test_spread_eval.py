@@ -114,3 +114,28 @@ def test_a_cross_validated_spread_and_no_data_are_one_line(spread, action_file, 
     res = runner.invoke(app, ["evaluate", str(cv), "--data", str(action_file)])
     assert res.exit_code == 2 and "a cross-validated spread is scored on its held-out folds" \
         in res.stderr and "`tactile seed-spread --eval-data FILE` (no --cv)" in res.stderr
+
+
+def test_the_later_session_benchmark_splits_recordings_by_number(tmp_path):
+    """benchmarks/texture_later_session.py: each session links every file of its recording
+    numbers and nothing else, so the three files hold disjoint recordings."""
+    from ..conftest import load_benchmark
+
+    bench = load_benchmark("texture_later_session")
+    source = tmp_path / "src"
+    for m in ("mat1", "mat12"):
+        (source / m).mkdir(parents=True)
+        for n in range(1, 11):
+            for kind in ("bio", "cw", "cv"):
+                (source / m / f"{m}_{n}_{kind}.csv").write_text(f"{m} {n} {kind}\n")
+    (source / "mat1" / "notes.csv").write_text("not a recording\n")
+    seen = set()
+    for name, samples in bench.SESSIONS.items():
+        dest = tmp_path / name
+        assert bench.session_tree(source, dest, samples) == 2 * len(samples)
+        files = {p.relative_to(dest).as_posix() for p in dest.rglob("*.csv")}
+        assert files == {f"{m}/{m}_{n}_{k}.csv" for m in ("mat1", "mat12") for n in samples
+                         for k in ("bio", "cw", "cv")}
+        assert not files & seen
+        seen |= files
+    assert len(seen) == 60
