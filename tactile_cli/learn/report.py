@@ -844,12 +844,9 @@ def _figure_section(folder: Path, file_origins: Mapping[str, dict[str, Any]],
 
 
 # -- the page --------------------------------------------------------------------------------
-def _spread_section(folder: Path, inputs: _Inputs) -> str:
-    """One ``tactile seed-spread`` folder: every seed's figures, their mean, SD and spread,
-    the notes and the dot plot."""
-    record_path = folder / SPREAD_JSON
-    inputs.add("seed spread", record_path)
-    record = read_spread_record(record_path)
+def _spread_table(record: dict[str, Any]) -> str:
+    """A seed spread's record (or a spread evaluation's) as a table: a row per seed, then
+    the mean, SD, min, max and spread."""
     from .seed_spread import LABELS, METRICS
 
     summary = _dict(record.get("summary"))
@@ -858,19 +855,44 @@ def _spread_section(folder: Path, inputs: _Inputs) -> str:
              _dict(r).get("n_trials", "")] for r in _list(record.get("by_seed"))]
     for stat in ("mean", "sd", "min", "max", "spread"):
         rows.append([stat, *(_pct(_dict(summary.get(n)).get(stat)) for n in names), ""])
+    return _table(["seed", *(f"{LABELS[n]} (%)" for n in names), "trials"], rows)
+
+
+def _spread_section(folder: Path, inputs: _Inputs) -> str:
+    """One ``tactile seed-spread`` folder: every seed's figures, their mean, SD and spread,
+    the notes and the dot plot; then each of its evaluations on other recordings
+    (``tactile evaluate SPREAD --data FILE``) beside the spread's own figures."""
+    from .spread_eval import FIGURE, RECORD, read_spread_eval
+
+    record_path = folder / SPREAD_JSON
+    inputs.add("seed spread", record_path)
+    record = read_spread_record(record_path)
     cv = record.get("cv")
     how = (f"{cv}-fold cross-validation, split {_dict(record.get('split')).get('mode', '?')}"
            if cv is not None else "scored on " + ", ".join(
                str(_dict(d).get("path")) for d in _list(record.get("eval_data"))))
     html = (f"<h3>{_e(folder.name)}</h3><p>config <code>{_e(record.get('config'))}</code>; "
             f"{_e(how)}; the figures of trials each seed's model never saw.</p>"
-            + _table(["seed", *(f"{LABELS[n]} (%)" for n in names), "trials"], rows))
+            + _spread_table(record))
     html += "".join(f"<p class='note'>{_e(n)}</p>" for n in _list(record.get("notes")))
     png = folder / "seed_spread.png"
     if png.is_file():
         inputs.add("figure", png)
         html += _figure(png.read_bytes(), f"{folder.name}: each seed's figure (dots), the "
                         "mean and one SD")
+    for path in sorted((folder / runs.EVAL_DIR).glob(f"*/{RECORD}")):
+        inputs.add("seed spread evaluation", path)
+        ev = read_spread_eval(path)
+        files = ", ".join(str(_dict(d).get("path")) for d in _list(ev.get("data")))
+        html += (f"<h4>{_e(folder.name)} on {_e(files)}</h4><p>every seed's model scored "
+                 f"on recordings the spread was not scored on (evaluation "
+                 f"<code>{_e(path.parent.name)}</code>).</p>" + _spread_table(ev))
+        html += "".join(f"<p class='note'>{_e(n)}</p>"
+                        for n in [*_list(ev.get("against_own")), *_list(ev.get("notes"))])
+        png = path.parent / FIGURE
+        if png.is_file():
+            inputs.add("figure", png)
+            html += _figure(png.read_bytes(), f"{folder.name} on {files}: each seed's figure")
     return html
 
 

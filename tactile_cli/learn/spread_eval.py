@@ -183,18 +183,27 @@ def evaluate_spread(
     return result
 
 
+def read_spread_eval(path: Path) -> dict[str, Any]:
+    """A ``spread_eval.json`` as a dict; one :class:`InputError` when it cannot be read."""
+    redo = "re-create it with `tactile evaluate SPREAD --data FILE --overwrite`"
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise InputError(f"not a readable seed-spread evaluation ({exc.__class__.__name__}); "
+                         f"{redo}", path=path) from None
+    if not isinstance(record, dict) or record.get("format") != FORMAT:
+        raise InputError(f"not a seed-spread evaluation (format {FORMAT}); {redo}", path=path)
+    return record
+
+
 def spread_evaluations(spread: Path) -> list[dict[str, Any]]:
     """The evaluations of a spread on other recordings (``SPREAD/eval/*/spread_eval.json``),
     each as its record, in name order; unreadable ones are skipped by name in ``notes``."""
     out = []
     for path in sorted((spread / runs.EVAL_DIR).glob(f"*/{RECORD}")):
         try:
-            record = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            record = None
-        if isinstance(record, dict) and record.get("format") == FORMAT:
-            out.append(record)
-        else:
+            out.append(read_spread_eval(path))
+        except InputError:
             out.append({"name": path.parent.name, "unreadable": str(path)})
     return out
 
@@ -207,5 +216,5 @@ def spread_eval_summary(result: SeedSpread) -> str:
                       f"wrote {result.out_dir}: {', '.join(files)}"])
 
 
-__all__ = ["FORMAT", "evaluate_spread", "own_figures_notes", "spread_eval_summary",
-           "spread_evaluations"]
+__all__ = ["FIGURE", "FORMAT", "RECORD", "evaluate_spread", "own_figures_notes",
+           "read_spread_eval", "spread_eval_summary", "spread_evaluations"]

@@ -62,6 +62,20 @@ def test_each_seed_is_scored_as_evaluate_scores_it(spread, tmp_path):
                                                           "spread_eval.png"]
     assert "own evaluation" in (written / "spread_eval.md").read_text()
     assert "own evaluation" in runner.invoke(app, ["info", str(out)]).stdout
+    res = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "report")])
+    assert res.exit_code == 0, res.output
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert f"spread on {later}</h4>" in page and "own evaluation" in page
+    # a damaged evaluation record: report refuses it in one line, info names it
+    record_path = written / "spread_eval.json"
+    kept = record_path.read_bytes()
+    record_path.write_text("{}")
+    res = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "report2")])
+    assert res.exit_code == 2 and len(res.stderr.strip().splitlines()) == 1
+    assert "spread_eval.json: not a seed-spread evaluation" in res.stderr
+    assert not (tmp_path / "report2").exists()
+    assert "evaluation later: unreadable" in runner.invoke(app, ["info", str(out)]).stdout
+    record_path.write_bytes(kept)
     # compare ranks the spread on that evaluation
     res = runner.invoke(app, ["compare", str(out), "--data-name", "later", "--json"])
     assert res.exit_code == 0, res.output
