@@ -138,7 +138,8 @@ API_SECTIONS: list[tuple[str, list[str]]] = [
                                   "write_stream_features"]),
     ("Learning and evaluation", ["train_run", "evaluate_run", "compare", "compare_runs",
                                  "perturb_evaluate", "perturb_runs", "export_run",
-                                 "run_sweep", "build_report"]),
+                                 "run_sweep", "seed_spread", "evaluate_spread",
+                                 "build_report"]),
     ("Figures", ["quicklook", "write_quicklook"]),
 ]
 

@@ -16,6 +16,7 @@ def _script():
     return load_benchmark("seed_spread")
 
 
+@pytest.mark.slow
 def test_each_seed_is_a_run_and_the_summary_is_their_spread(action_file, tmp_path, capsys):
     config = tmp_path / "tiny.yaml"
     config.write_text(tiny_config(data={"split": {"mode": "random", "val_fraction": 0.0}},

@@ -40,6 +40,7 @@ def grouped_spread(action_file, tmp_path_factory):
     return config, out, json.loads(res.stdout)
 
 
+@pytest.mark.slow
 def test_each_seed_is_the_run_that_train_and_evaluate_make(grouped_spread, action_file,
                                                            tmp_path):
     config, out, record = grouped_spread
@@ -76,6 +77,7 @@ def test_each_seed_is_the_run_that_train_and_evaluate_make(grouped_spread, actio
         assert metrics["run"] == row["run"] == str(out / f"seed_{row['seed']}")
 
 
+@pytest.mark.slow
 def test_a_finished_spread_is_kept_and_a_stopped_one_resumes(grouped_spread, action_file,
                                                              tmp_path):
     config, out, record = grouped_spread
@@ -116,6 +118,7 @@ def test_a_finished_spread_is_kept_and_a_stopped_one_resumes(grouped_spread, act
                                                        "seed_spread.md"]
 
 
+@pytest.mark.slow
 def test_without_cv_each_seed_is_scored_on_the_eval_data(action_file, heldout_file, tmp_path):
     config = _config(tmp_path, mode="random")
     res = _spread(config, "--data", action_file, "--eval-data", heldout_file, "--seeds", "1",
@@ -131,6 +134,7 @@ def test_without_cv_each_seed_is_scored_on_the_eval_data(action_file, heldout_fi
     assert not (tmp_path / "t").exists()
 
 
+@pytest.mark.slow
 def test_seeds_side_by_side_give_the_same_figures(action_file, tmp_path):
     """Two local worker processes against one after another here: the same bits, and a
     random split, drawn from the seed, named in the notes."""
@@ -149,6 +153,7 @@ def test_seeds_side_by_side_give_the_same_figures(action_file, tmp_path):
     assert records[0]["summary"] == records[1]["summary"]
 
 
+@pytest.mark.slow
 def test_a_seed_that_fails_is_one_line_and_leaves_no_folder(action_file, tmp_path):
     config = tmp_path / "bad.yaml"
     config.write_text(tiny_config(data={"stream": "nope"}).as_yaml())
@@ -178,6 +183,7 @@ def test_bad_seeds_are_one_line(text, message):
     assert str(err.value) == message
 
 
+@pytest.mark.slow
 def test_compare_takes_a_spread_as_one_run_at_its_seeds_mean(grouped_spread, action_file,
                                                            tmp_path):
     config, out, record = grouped_spread
@@ -209,6 +215,7 @@ def test_compare_takes_a_spread_as_one_run_at_its_seeds_mean(grouped_spread, act
         assert noted[0].startswith(", ".join(near_edge) + ": within one seed SD")
 
 
+@pytest.mark.slow
 def test_compare_refuses_a_spread_missing_a_seed(grouped_spread, tmp_path):
     _, out, _ = grouped_spread
     broken = tmp_path / "broken"
@@ -220,6 +227,7 @@ def test_compare_refuses_a_spread_missing_a_seed(grouped_spread, tmp_path):
                                   "(give the folder `tactile train` wrote)")
 
 
+@pytest.mark.slow
 def test_report_shows_a_spread_and_its_seed_runs(grouped_spread, tmp_path):
     _, out, record = grouped_spread
     res = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "rep")])
@@ -247,6 +255,7 @@ def test_whether_the_folds_depend_on_the_seed(action_file, tmp_path, mode, cv, d
     assert plan["split_depends_on_seed"] is depends
 
 
+@pytest.mark.slow
 def test_compare_puts_a_spread_beside_a_plain_run_of_the_same_data(grouped_spread,
                                                                    action_file, tmp_path):
     config, out, record = grouped_spread
@@ -284,6 +293,7 @@ def test_each_seeds_evaluation_warnings_reach_the_spread(tmp_path):
     assert shared["a note"] == [0]
 
 
+@pytest.mark.slow
 def test_info_summarises_a_spread(grouped_spread, tmp_path):
     config, out, record = grouped_spread
     res = runner.invoke(app, ["info", str(out)])
@@ -304,6 +314,7 @@ def test_info_summarises_a_spread(grouped_spread, tmp_path):
                                   "with `tactile seed-spread`")
 
 
+@pytest.mark.slow
 def test_a_damaged_evaluation_in_a_stopped_spread_is_one_line(grouped_spread, action_file,
                                                               tmp_path):
     config, _, _ = grouped_spread

@@ -33,6 +33,7 @@ def spread(action_file, heldout_file, tmp_path_factory):
     return config, out, later
 
 
+@pytest.mark.slow
 def test_each_seed_is_scored_as_evaluate_scores_it(spread, tmp_path):
     config, out, later = spread
     res = runner.invoke(app, ["evaluate", str(out), "--data", str(later), "--json"])
@@ -85,6 +86,7 @@ def test_each_seed_is_scored_as_evaluate_scores_it(spread, tmp_path):
     assert point["latency_ms"] == metrics["latency"]["batch1_ms_median"] > 0
 
 
+@pytest.mark.slow
 def test_again_is_refused_resumed_or_replaced(spread):
     _, out, later = spread
     argv = ["evaluate", str(out), "--data", str(later), "--name", "again", "--no-latency"]
@@ -110,6 +112,7 @@ def test_again_is_refused_resumed_or_replaced(spread):
     (["--name", "seed_spread"], "the evaluation name 'seed_spread' is the spread's own"),
     (["--name", "../x"], "--name (='../x') must be a plain folder name"),
 ])
+@pytest.mark.slow
 def test_what_a_spread_does_not_take_is_one_line(spread, extra, message):
     _, out, later = spread
     res = runner.invoke(app, ["evaluate", str(out), "--data", str(later), *extra])
@@ -117,6 +120,7 @@ def test_what_a_spread_does_not_take_is_one_line(spread, extra, message):
     assert len(res.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_a_cross_validated_spread_and_no_data_are_one_line(spread, action_file, tmp_path):
     config, out, _ = spread
     res = runner.invoke(app, ["evaluate", str(out)])
