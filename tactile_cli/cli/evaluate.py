@@ -74,7 +74,9 @@ def evaluate_command(
     """Evaluate a trained run: overall accuracy, per-class precision/recall/F1 and confusion
     matrix (PNG + JSON) per classification head, MAE/RMSE per regression head, latency per
     window at batch 1 and windows/s at batch 1024 on this machine, parameters and size.
-    Files go to RUN/eval/<name>/."""
+    Files go to RUN/eval/<name>/. A seed-spread folder (`tactile seed-spread --eval-data`)
+    has every seed's model scored so, into SPREAD/seed_S/eval/<name>/, and the seeds' mean,
+    SD and spread beside the spread's own figures into SPREAD/eval/<name>/."""
 
     def body() -> None:
         from ..learn.pipeline import evaluate_run
