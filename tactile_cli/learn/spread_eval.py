@@ -70,15 +70,22 @@ def own_figures_notes(own: dict[str, Any], here: dict[str, dict[str, float]],
     whether the change is larger than the seeds' SD there (the larger of the two SDs). A
     per-trial figure also says how much one of the ``n_trials`` trials weighs: a change of
     a trial or two is within what the trials drawn can give (see each seed's interval)."""
+    def number(d: Any, key: str) -> float | None:
+        v = d.get(key) if isinstance(d, dict) else None
+        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else None
+
     notes = []
-    for name in (n for n in METRICS if n in here and isinstance(own.get(n), dict)):
-        a, b = own[name], here[name]
-        delta = 100 * (b["mean"] - a["mean"])
-        sd = 100 * max(a.get("sd", 0.0), b["sd"])
+    for name in (n for n in METRICS if n in here):
+        a, b = own.get(name) if isinstance(own, dict) else None, here[name]
+        mean = number(a, "mean")
+        if mean is None:  # the spread has no such figure (or a damaged record): nothing to set
+            continue      # this one beside
+        delta = 100 * (b["mean"] - mean)
+        sd = 100 * max(number(a, "sd") or 0.0, b["sd"])
         size = ("larger than" if abs(delta) > sd else "within") + f" one seed SD, {sd:.2f} pp"
         if name.startswith("trial_") and n_trials:
             size += f"; one of the {n_trials} trials is {100 / n_trials:.1f} pp"
-        notes.append(f"{LABELS[name]}: {100 * a['mean']:.1f} % on the spread's own evaluation, "
+        notes.append(f"{LABELS[name]}: {100 * mean:.1f} % on the spread's own evaluation, "
                      f"{100 * b['mean']:.1f} % here ({delta:+.1f} pp; {size})")
     return notes
 

@@ -157,3 +157,20 @@ def test_the_later_session_benchmark_splits_recordings_by_number(tmp_path):
         assert not files & seen
         seen |= files
     assert len(seen) == 60
+
+
+def test_each_figure_is_set_beside_the_spreads_own_and_its_seed_sd():
+    from tactile_cli.learn.spread_eval import own_figures_notes
+
+    own = {"window_accuracy": {"mean": 0.627, "sd": 0.018},
+           "trial_majority_accuracy": {"mean": 0.96, "sd": 0.022},
+           "window_macro_f1": {"sd": 0.01}}  # no mean: nothing to set beside
+    here = {"window_accuracy": {"mean": 0.615, "sd": 0.015},
+            "trial_majority_accuracy": {"mean": 0.923, "sd": 0.030},
+            "window_macro_f1": {"mean": 0.6, "sd": 0.0}}
+    assert own_figures_notes(own, here, n_trials=60) == [
+        "window accuracy: 62.7 % on the spread's own evaluation, 61.5 % here (-1.2 pp; within "
+        "one seed SD, 1.80 pp)",
+        "per trial, majority: 96.0 % on the spread's own evaluation, 92.3 % here (-3.7 pp; "
+        "larger than one seed SD, 3.00 pp; one of the 60 trials is 1.7 pp)"]
+    assert own_figures_notes([1, 2], here) == own_figures_notes({}, here) == []
