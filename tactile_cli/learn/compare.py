@@ -663,9 +663,10 @@ def compare(run_dirs: Sequence[str | Path], *, data_name: str | None = None,
         infos.append(info)
     plain = [d for d, m in zip(dirs, members, strict=True) if m is None]
     spread_first = [d for d, m in zip(dirs, members, strict=True) if m is not None]
-    if plain and spread_first:  # spreads are read at their own evaluation, on the same data
-        name = choose_data_name(plain, data_name)
-        spread_name = choose_data_name(spread_first, SPREAD_EVAL)
+    if plain and spread_first:  # spreads are read at their own evaluation, on the same data,
+        name = choose_data_name(plain, data_name)  # or at `data_name` when every one has it
+        spread_name = choose_data_name(spread_first, data_name if data_name is not None and all(
+            data_name in eval_names(d) for d in spread_first) else SPREAD_EVAL)
     else:
         name = spread_name = choose_data_name(dirs, data_name)
     labels = run_labels(given, families)

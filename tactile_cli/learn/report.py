@@ -57,6 +57,7 @@ from ..store.outdir import check_output_folder, output_folder
 from ..store.provenance import current_command, sha256_of, utc_now
 from . import runs
 from .compare import (
+    SPREAD_EVAL,
     SPREAD_JSON,
     check_run_folder,
     compare,
@@ -474,24 +475,50 @@ def _comparison_table(cmp: Any, by_run: Mapping[str, _Result]) -> str:
         row_class=classes)
 
 
-def _comparison_sections(run_dirs: Sequence[Path], results: Sequence[_Result],
-                         margin_pp: float, metric: str,
+def _comparison_sections(units: Sequence[Path], members: Mapping[Path, Sequence[Path]],
+                         results: Sequence[_Result], margin_pp: float, metric: str,
                          notes: list[str]) -> tuple[str, list[str]]:
-    """One comparison per evaluation name two or more runs share, recorded data first."""
+    """One comparison per evaluation name two or more units share, recorded data first. A
+    unit is a run folder or a seed-spread folder (``members``: its seed runs), which is one
+    point at its seeds' mean, never its seeds against each other. Spreads beside plain runs
+    with no name in common are also compared at their own evaluation (what ``tactile
+    compare`` does with them)."""
+    def names_of(u: Path) -> list[str]:
+        return eval_names(members[u][0]) if u in members else eval_names(u)
+
     by_name: dict[str, list[Path]] = {}
-    for d in run_dirs:
-        for name in eval_names(d):
-            by_name.setdefault(name, []).append(d)
+    for u in units:
+        for name in names_of(u):
+            by_name.setdefault(name, []).append(u)
+    groups = [(name, us, name) for name, us in by_name.items() if len(us) >= 2]
+    spreads = [u for u in units if u in members]
+    plain = [u for u in units if u not in members]
+    shared = sorted(set.intersection(*(set(names_of(u)) for u in plain))) if plain else []
+    if spreads and plain and len(shared) == 1 and not any(
+            set(spreads) & set(us) and set(plain) & set(us) for _, us, _ in groups):
+        # the runs' one evaluation beside the spreads' own, as `tactile compare` reads them
+        groups.append((None, list(units), f"{shared[0]} and the spreads' own"))
+
+    def first_run(u: Path) -> Path:
+        return members[u][0] if u in members else u
+
+    def eval_name(u: Path, name: str | None) -> str:
+        if name is not None:
+            return name
+        return SPREAD_EVAL if u in members else shared[0]
+
     origin_of = {(str(r.run), r.name): r.evaluated_on for r in results}
-    order = sorted((name for name, dirs in by_name.items() if len(dirs) >= 2),
-                   key=lambda n: (_rank(origin_of.get((str(by_name[n][0]), n), {})), n))
+
+    def origin(us: Sequence[Path], name: str | None) -> Mapping[str, Any]:
+        return origin_of.get((str(first_run(us[0])), eval_name(us[0], name)), {})
+
+    groups.sort(key=lambda g: (_rank(origin(g[1], g[0])), g[2]))
     parts, done = [], []
-    for name in order:
-        dirs = by_name[name]
-        origin = origin_of.get((str(dirs[0]), name), {})
+    for name, us, title in groups:
         chosen = metric
         if metric == "auto":
-            mine = [r for r in results if r.name == name and str(r.run) in {str(d) for d in dirs}]
+            mine = [r for r in results if any(r.run == first_run(u) and r.name ==
+                                              eval_name(u, name) for u in us)]
             voted = mine and all(isinstance(_primary(r.metrics).get("per_trial"), dict)
                                  for r in mine)
             pooled = mine and all(isinstance(_primary(r.metrics).get("per_group"), dict)
@@ -499,26 +526,35 @@ def _comparison_sections(run_dirs: Sequence[Path], results: Sequence[_Result],
             chosen = ("group_accuracy" if pooled else "trial_accuracy" if voted
                       else "accuracy")
         try:
-            cmp = compare(dirs, data_name=name, margin_pp=margin_pp, metric=chosen)
+            cmp = compare(us, data_name=name, margin_pp=margin_pp, metric=chosen)
         except TactileError as exc:
-            msg = f"evaluation {name!r} not compared: {exc}"
+            msg = f"evaluation {title!r} not compared: {exc}"
             notes.append(msg)
-            parts.append(f"<h3>{_e(name)}</h3><p class='origin'>{_tag(origin, 'data:')}</p>"
-                         f"<p class='note'>{_e(msg)}</p>")
+            parts.append(f"<h3>{_e(title)}</h3><p class='origin'>"
+                         f"{_tag(origin(us, name), 'data:')}</p><p class='note'>{_e(msg)}</p>")
             continue
         notes.extend(cmp.notes)
-        done.append(name)
-        by_run = {str(r.run): r for r in results if r.name == name}
+        done.append(title)
+        by_run: dict[str, _Result] = {}
+        for u in us:  # a spread's row has its seeds' mean: no one seed's intervals beside it
+            r = next((r for r in results if r.run == first_run(u)
+                      and r.name == eval_name(u, name)), None)
+            if r is not None:
+                by_run[str(u)] = r if u not in members else _Result(
+                    run=u, label=r.label, name=r.name, metrics={}, evaluated_on=r.evaluated_on,
+                    trained_on=r.trained_on, independent=r.independent)
         first = cmp.points[0]
         data = ", ".join(Path(str(d["path"])).name for d in first.data)
         parts.append(
-            f"<h3 id='cmp-{_e(name)}'>{_e(name)}</h3>"
-            f"<p class='origin'>{_tag(origin, 'evaluated on')}</p>"
+            f"<h3 id='cmp-{_e(title)}'>{_e(title)}</h3>"
+            f"<p class='origin'>{_tag(origin(us, name), 'evaluated on')}</p>"
             f"<p>{len(cmp.points)} runs evaluated on {_e(data)} (split {_e(first.split)}, "
             f"{first.n_windows:,} windows). <b>{_e(cmp.summary())}</b>.</p>"
+            + "".join(f"<p class='note'>{_e(n)}</p>" for n in cmp.notes
+                      if "seed" in n)
             + _comparison_table(cmp, by_run)
             + _figure(plot_comparison(cmp), f"{cmp.metric_label} against latency per window "
-                      f"(batch 1, median) on {name}; dashed: Pareto front"))
+                      f"(batch 1, median) on {title}; dashed: Pareto front"))
     return "".join(parts), done
 
 
@@ -967,7 +1003,10 @@ def build_report(
         runs.read_run_config(d)  # a damaged config is refused before anything is written
     labels = run_labels(dirs, [i["model"]["family"] for i in infos])
     results = _results(dirs, labels, infos, origins, inputs)
-    cmp_html, compared = _comparison_sections(dirs, results, margin_pp, metric, notes)
+    members = {f: spread_runs(f) or [] for f in spreads}
+    units = [Path(d) for d in run_dirs]
+    cmp_html, compared = _comparison_sections(units, members, results, margin_pp, metric,
+                                              notes)
     pert_html, perturbed = _perturbation_sections(dirs, inputs)
     run_html = "".join(
         _run_section(dirs[i], labels[i], infos[i], [r for r in results if r.run == dirs[i]],

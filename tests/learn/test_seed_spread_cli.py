@@ -269,6 +269,15 @@ def test_compare_puts_a_spread_beside_a_plain_run_of_the_same_data(grouped_sprea
     plain = next(r for r in cmp["runs"] if r["run"] == str(run))
     assert plain["seeds"] is None and plain["eval_name"] != "seed_spread"
     assert plain["score"] == record["by_seed"][1]["window_accuracy"]  # seed 2 alone
+    # report: the spread is one point beside the run, never its seeds against each other
+    res = runner.invoke(app, ["report", str(out), str(run), "--out", str(tmp_path / "rep")])
+    assert res.exit_code == 0, res.output
+    prov = json.loads((tmp_path / "rep" / "report.json").read_text())
+    assert prov["compared"] == [f"{plain['eval_name']} and the spreads' own"]
+    page = (tmp_path / "rep" / "index.html").read_text()
+    assert "2 runs evaluated on" in page and f"{100 * cmp['runs'][0]['score']:.2f}" in page
+    res = runner.invoke(app, ["report", str(out), "--out", str(tmp_path / "rep1")])
+    assert json.loads((tmp_path / "rep1" / "report.json").read_text())["compared"] == []
 
 
 def test_each_seeds_evaluation_warnings_reach_the_spread(tmp_path):
