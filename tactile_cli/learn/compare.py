@@ -6,7 +6,7 @@ on this machine. The runs must have been evaluated on the same recordings (the s
 by SHA-256, or files derived from them such as ``tactile centroids`` streams, with the same
 trials and split); :func:`compare` refuses to put other numbers side by side. Each
 evaluation must also have been of data of its run's input (:mod:`.inputs`): a metrics.json
-whose recorded ``input`` has a sample period more than 0.1 % from the ``input`` of the
+whose recorded ``input`` has a sample period more than 0.5 % from the ``input`` of the
 run's run.json, or other channels or units, is refused; where either file predates that
 record the comparison goes ahead with a note saying what was not checked.
 

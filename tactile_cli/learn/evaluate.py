@@ -82,9 +82,9 @@ def evaluate(
     ``split="test"`` keeps the trials the run held out for test (its ``split.csv``; for
     trials the run never saw, those its split rule puts in test); ``"all"`` uses every
     trial. ``threads`` (default 1) is the torch thread count of the latency measurement.
-    Data of another sample period (more than 0.1 %), other channels or units than the run
-    was trained on are refused (:func:`.inputs.check_input`). A cross-validated run
-    (``tactile train --cv``) is evaluated fold by fold on its held-out trials
+    Data of another sample period (more than 0.5 %; above 0.1 % a note), other channels or
+    units than the run was trained on are refused (:func:`.inputs.check_input`). A
+    cross-validated run (``tactile train --cv``) is evaluated fold by fold on its held-out trials
     (:func:`tactile_cli.learn.cv.evaluate_cv`); ``data_paths`` may then be None (the
     run's own data).
 

@@ -4,8 +4,12 @@ Issue 10, item 3. A model trained on 100 Hz taxels gives a silently wrong answer
 data, or on data whose channels are other quantities. ``tactile train`` records the
 :class:`InputSpec` of its training data in ``run.json`` (key ``input``); ``tactile
 evaluate`` and ``tactile perturb`` refuse data whose sample period differs from it by more
-than :data:`PERIOD_RTOL` (0.1 %) or whose selected channel names (in model order) or units
-differ, and ``tactile compare`` refuses an evaluation whose metrics file records such data.
+than :data:`PERIOD_RTOL_MAX` (0.5 %) or whose selected channel names (in model order) or
+units differ, and ``tactile compare`` refuses an evaluation whose metrics file records such
+data. Between :data:`PERIOD_RTOL` (0.1 %) and 0.5 % the data are accepted with a note naming
+the file and both rates (:func:`period_notes`): two recordings of one sensor differ that
+much by their clocks (Xela sessions of one set at 59.78 and 59.88 Hz, each rate a median
+over its file); another rate setting differs by 1 % or more.
 
 The sample period of a trial is read with the stream (:func:`.data.read_trials`): the
 sensor's ``sample_rate_hz`` when > 0, else the ``bin_s`` attribute of the stream or its
@@ -26,8 +30,10 @@ from typing import Any
 from ..errors import InputError
 from .data import TrialSeries
 
-#: Largest relative difference of two sample periods that still counts as the same rate.
+#: Largest relative difference of two sample periods that counts as the same rate.
 PERIOD_RTOL = 1e-3
+#: Largest relative difference accepted at all (with a note above :data:`PERIOD_RTOL`).
+PERIOD_RTOL_MAX = 5e-3
 
 
 @dataclass(frozen=True)
@@ -88,9 +94,26 @@ def period_text(period_s: float | None) -> str:
     return f"{period_s:.6g} s ({1.0 / period_s:.6g} Hz)"
 
 
-def same_period(a: float, b: float) -> bool:
-    """``a`` within :data:`PERIOD_RTOL` of ``b`` (relative to ``b``)."""
-    return abs(a - b) <= PERIOD_RTOL * abs(b)
+def same_period(a: float, b: float, rtol: float = PERIOD_RTOL) -> bool:
+    """``a`` within ``rtol`` (default :data:`PERIOD_RTOL`) of ``b`` (relative to ``b``)."""
+    return abs(a - b) <= rtol * abs(b)
+
+
+def period_notes(trials: Sequence[TrialSeries], ref: float | None, whose: str) -> list[str]:
+    """One note per file whose trials' sample period differs from ``ref`` by more than
+    :data:`PERIOD_RTOL` (accepted up to :data:`PERIOD_RTOL_MAX`); ``whose``: what ``ref``
+    is (``"the run's"``, ``"the first file's"``)."""
+    if ref is None:
+        return []
+    seen: dict[tuple[str, float], None] = {}
+    for t in trials:
+        p = _period(t)
+        if p is not None and not same_period(p, ref):
+            seen.setdefault((str(t.file), p), None)
+    return [f"{file}: sample period {period_text(p)} differs from {whose} {period_text(ref)} "
+            f"by {100 * abs(p - ref) / ref:.2f} % (accepted up to "
+            f"{100 * PERIOD_RTOL_MAX:g} %, as two clocks of one sensor differ; a window of "
+            "the same samples spans that much more or less time)" for file, p in seen]
 
 
 def _where(trial: TrialSeries, stream: str) -> str:
@@ -114,8 +137,9 @@ def input_spec(trials: Sequence[TrialSeries], stream: str) -> InputSpec:
     """The input shared by every trial of ``trials`` (of one command's files).
 
     Raises :class:`InputError` naming the file and stream of the first trial whose sample
-    period differs from the first known one by more than 0.1 %, or whose channels or
-    units differ from the first trial's.
+    period differs from the first known one by more than 0.5 % (:data:`PERIOD_RTOL_MAX`;
+    :func:`period_notes` names those above 0.1 %), or whose channels or units differ from
+    the first trial's.
     """
     if not trials:
         raise InputError("no trials to take the input stream from")
@@ -124,11 +148,12 @@ def input_spec(trials: Sequence[TrialSeries], stream: str) -> InputSpec:
     ref_period = _period(ref)
     for t in trials:
         p = _period(t)
-        if ref_period is not None and p is not None and not same_period(p, ref_period):
+        if ref_period is not None and p is not None and not same_period(p, ref_period,
+                                                                        PERIOD_RTOL_MAX):
             raise InputError(
                 f"sample period {period_text(p)} differs from {period_text(ref_period)} "
-                f"of {ref.key} by more than 0.1 %; resample the files to one rate or use "
-                "them in separate runs", path=t.file, where=_where(t, stream))
+                f"of {ref.key} by more than {100 * PERIOD_RTOL_MAX:g} %; resample the files "
+                "to one rate or use them in separate runs", path=t.file, where=_where(t, stream))
         if t.channel_units != first.channel_units:
             raise InputError(
                 f"channel units {_names(t.channel_units)} differ from "
@@ -141,13 +166,14 @@ def input_spec(trials: Sequence[TrialSeries], stream: str) -> InputSpec:
 
 def mismatch(data: InputSpec, trained: InputSpec) -> tuple[str, str] | None:
     """How ``data`` differ from the run's input ``trained``: (what differs, with both
-    values; what to do), or None when the sample periods are within 0.1 % (or one is
-    unknown) and the channel names (order included) and units are equal."""
+    values; what to do), or None when the sample periods are within 0.5 %
+    (:data:`PERIOD_RTOL_MAX`; or one is unknown) and the channel names (order included) and
+    units are equal."""
     p, ref = data.sample_period_s, trained.sample_period_s
-    if p is not None and ref is not None and not same_period(p, ref):
+    if p is not None and ref is not None and not same_period(p, ref, PERIOD_RTOL_MAX):
         return (f"sample period {period_text(p)} differs from the run's {period_text(ref)} "
-                "by more than 0.1 %", f"resample the data to {1.0 / ref:.6g} Hz or retrain "
-                "on it")
+                f"by more than {100 * PERIOD_RTOL_MAX:g} %", f"resample the data to "
+                f"{1.0 / ref:.6g} Hz or retrain on it")
     if data.channels != trained.channels:
         return (f"channels {_names(data.channels)} differ from the run's "
                 f"{_names(trained.channels)}", "rename the data's channels to the run's or "
@@ -190,12 +216,14 @@ def checked_input(trials: Sequence[TrialSeries], stream: str, trained: InputSpec
     """The data's :class:`InputSpec` after the checks of ``tactile evaluate`` and
     ``tactile perturb``: every trial against the run's input (when the run records one)
     and against each other. Returns the spec and the notes to report (one when the run
-    records no input, so nothing was checked against it)."""
+    records no input, so nothing was checked against it; one per file whose sample period
+    is accepted but not the run's, :func:`period_notes`)."""
     if trained is not None:
         check_input(trials, trained)
     spec = input_spec(trials, stream)
-    notes = [] if trained is not None else [unchecked_note(spec, run_path)]
-    return spec, notes
+    if trained is None:
+        return spec, [unchecked_note(spec, run_path)]
+    return spec, period_notes(trials, trained.sample_period_s, "the run's")
 
 
 def input_record(spec: InputSpec, trained: InputSpec | None) -> dict[str, Any]:
@@ -204,6 +232,7 @@ def input_record(spec: InputSpec, trained: InputSpec | None) -> dict[str, Any]:
     return {**spec.as_dict(), "checked_against_run": trained is not None}
 
 
-__all__ = ["PERIOD_RTOL", "InputSpec", "check_input", "checked_input", "input_record",
+__all__ = ["PERIOD_RTOL", "PERIOD_RTOL_MAX", "InputSpec", "check_input", "checked_input",
+           "input_record", "period_notes",
            "input_spec", "mismatch", "period_text", "same_period", "trial_input",
            "unchecked_note"]

@@ -51,7 +51,7 @@ from .device import device_name, resolve_device
 from .drift import recording_record
 from .figures import plot_curves
 from .heads import HeadSpec, primary_head
-from .inputs import InputSpec, input_spec
+from .inputs import InputSpec, input_spec, period_notes
 from .models import MultiTaskNet, build_model, count_parameters, multitask_loss, state_size_bytes
 from .preprocess import augment_windows
 from .sensor_unit import sensor_unit_record
@@ -85,6 +85,7 @@ class Prepared:
     normalisation: Normalisation
     windows: dict[str, WindowSet]  # split -> windows
     input: InputSpec
+    notes: list[str] = field(default_factory=list)  # trials at a rate accepted, not the same
 
 
 @dataclass
@@ -147,8 +148,9 @@ class GivenSplits:
 def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
             given: GivenSplits | None = None) -> Prepared:
     """Read, split, normalise (training split only) and window the training data; every
-    trial must have the same sample period (within 0.1 %) and channel units. ``given``:
-    splits from outside the config (else the config's ``data.split`` rule)."""
+    trial must have the same sample period (within 0.5 %, a note above 0.1 %) and channel
+    units. ``given``: splits from outside the config (else the config's ``data.split``
+    rule)."""
     d = config.data
     trials = read_trials(data_paths, d)
     trial_groups(trials, d)  # a trial without the decide_by label: refused before training
@@ -176,7 +178,8 @@ def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
     windows = {"train": train_ws}
     for s in ("val", "test"):
         windows[s] = make_windows(by_split[s], d, heads, norm)
-    return Prepared(trials, assignment, heads, norm, windows, spec)
+    notes = period_notes(trials, spec.sample_period_s, "the first trial's")
+    return Prepared(trials, assignment, heads, norm, windows, spec, notes)
 
 
 def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
@@ -439,7 +442,7 @@ def train(
         "split": {"mode": prep.assignment.mode, "by": prep.assignment.by,
                   "source": None if given is None else given.source,
                   "trials": n_trials, "windows": n_windows,
-                  "warnings": list(prep.assignment.warnings)},
+                  "warnings": [*prep.assignment.warnings, *prep.notes]},
         "model": {"family": config.model.family, "n_params": n_params, "size_mb": size_mb,
                   "window": d.window, "channels": list(d.channels), "stream": d.stream},
         "training": {"epochs_run": len(history), "best_epoch": best_epoch,
@@ -476,7 +479,7 @@ def train(
         wall_time_s=float(info["wall_time_s"]), train_time_s=train_time, threads=threads,
         n_trials=n_trials, n_windows=n_windows, best_val_loss=best.val_loss,
         best_val_accuracy=best.val_accuracy, heads=prep.heads,
-        warnings=list(prep.assignment.warnings), device=device_name(dev),
+        warnings=[*prep.assignment.warnings, *prep.notes], device=device_name(dev),
     )
 
 
