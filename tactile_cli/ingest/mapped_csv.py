@@ -587,10 +587,16 @@ def ingest_mapped_csv(inputs: Sequence[Path], options: MappedCsvOptions, writer:
     Trials become groups named by ``trials.name`` (default file stem or folder name), with
     the trial labels of the mapping; each stream becomes ``signals/<stream>`` with its
     sensor in ``/sensors``. Every file read is recorded as a source. Returns one note per
-    stream whose repeated or out-of-order stamps a ``time.stamps`` policy handled.
+    file whose columns no stream, time base or label reads ("left out: ...", also in the
+    file attribute ``columns_left_out``; nothing is dropped silently), and one per stream
+    whose repeated or out-of-order stamps a ``time.stamps`` policy handled.
     """
+    from .mapped_csv_describe import unread_columns
+
     mapping_path, mapping, plans = load_plans(inputs, options)
     writer.h5.attrs["mapping_json"] = mapping.model_dump_json()
+    left_out = unread_columns(plans[0], mapping)
+    writer.h5.attrs["columns_left_out"] = "; ".join(left_out) or "none"
     rates: dict[str, list[float]] = {s.name: [] for s in mapping.streams}
     met: dict[str, list[tuple[str, SettledStamps]]] = {s.name: [] for s in mapping.streams}
     progress.start(sum(len(set(p.files.values())) for p in plans), "reading CSV files")
@@ -631,8 +637,10 @@ def ingest_mapped_csv(inputs: Sequence[Path], options: MappedCsvOptions, writer:
                           channel_units=[unit_of(s, n, mapping_path) for n in names],
                           description=description)
     progress.finish()
-    return [_stamps_note(s.name, s.time.stamps, met[s.name], len(plans))
-            for s in mapping.streams if s.time is not None and met[s.name]]
+    return [*(f"left out: {line} (read in the first trial's files; every trial's share "
+              "their columns)" for line in left_out),
+            *(_stamps_note(s.name, s.time.stamps, met[s.name], len(plans))
+              for s in mapping.streams if s.time is not None and met[s.name])]
 
 
 #: Trials a stamps note names before "and N more".

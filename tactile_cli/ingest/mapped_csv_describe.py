@@ -69,7 +69,7 @@ def describe_mapped_csv(path: Path, options: MappedCsvOptions,
     notes = [note for s in mapping.streams for note in tally[s.name].notes(s, len(plans))]
     return RecordingSummary(file=str(path), format=fmt.name, title=fmt.title,
                             size_bytes=sum(p.stat().st_size for p in files), streams=streams,
-                            trials=trials, dropped=_unread_columns(plans[0], mapping),
+                            trials=trials, dropped=unread_columns(plans[0], mapping),
                             notes=notes, ingest_options={"mapping": str(mapping_path)})
 
 
@@ -156,7 +156,7 @@ class _StreamTally:
                 f"repeated or out-of-order time stamps: {shown}{more}; {what}"]
 
 
-def _unread_columns(plan: TrialPlan, mapping: CsvMapping) -> list[str]:
+def unread_columns(plan: TrialPlan, mapping: CsvMapping) -> list[str]:
     """One line per file of the first trial whose columns no stream, time base or label
     reads (checked on the first trial: all trials share their streams' columns)."""
     used: dict[str, set[str]] = {t: set() for t in plan.files}

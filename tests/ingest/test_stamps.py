@@ -203,6 +203,8 @@ def test_real_fabric_files_with_one_repeated_stamp(tmp_path):
     out = ingest(files, tmp_path / "fabric.h5", options={"mapping": mapping},
                  on_note=notes.append)
     assert notes == [
+        "left out: BeigeCotton_F120_V20mmps_0.csv: 2 column(s) no stream reads: proximity1, "
+        "proximity2 (read in the first trial's files; every trial's share their columns)",
         "stream 'fingertip': 2 of 3 trial(s) had repeated or out-of-order time stamps "
         "(BeigeCotton_F120_V20mmps_0 1 repeated, WovenFabric_F150_V-120mmps_0 1 repeated); "
         "`stamps: drop_repeats`: 2 sample(s) dropped, the first of each stamp kept (each trial "
@@ -213,6 +215,8 @@ def test_real_fabric_files_with_one_repeated_stamp(tmp_path):
         assert sig["data"].shape == (1059, 16) and sig.attrs["stamps_repeated"] == 1
         assert np.all(np.diff(sig["t_s"][()]) > 0)
         assert f["trials/WovenFabric_F150_V-120mmps_0/signals/fingertip/data"].shape == (177, 16)
+        assert f.attrs["columns_left_out"] == ("BeigeCotton_F120_V20mmps_0.csv: 2 column(s) no "
+                                               "stream reads: proximity1, proximity2")
 
 
 def test_shipped_fabric_mapping_keeps_the_files_with_a_repeated_stamp(tmp_path):
