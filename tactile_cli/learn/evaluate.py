@@ -147,6 +147,7 @@ def evaluate(
                              threshold_sd=shift_threshold_sd).as_dict(),
         "interleaving": interleaving(trials, run.info.get("recording_order")).as_dict(),
         "device": used,
+        "trained_recordings": trained_recordings(trials, run.info),
     }
     if exported is not None:
         from .export import check_exported, raw_windows
@@ -165,6 +166,26 @@ def evaluate(
     )
     write_eval(result, run.heads, ws, decoded, run.normalisation.targets, overwrite=overwrite)
     return result
+
+
+def trained_recordings(trials: Sequence[Any], info: dict[str, Any]) -> dict[str, Any] | None:
+    """How many evaluated trials were read from a source file the run trained on (run.json
+    ``trained_sources_sha256``): the same recordings in any tactile file, not only the
+    training file itself. None for a run that records no sources (older runs)."""
+    from ..store.reader import trial_source_hashes
+
+    trained = info.get("trained_sources_sha256")
+    if not isinstance(trained, list):
+        return None
+    known = set(map(str, trained))
+    by_file: dict[str, dict[str, frozenset[str]]] = {}
+    hits = []
+    for t in trials:
+        if t.file not in by_file:
+            by_file[t.file] = trial_source_hashes(t.file)
+        if by_file[t.file].get(t.trial, frozenset()) & known:
+            hits.append(t.key)
+    return {"n_trials": len(hits), "n_evaluated": len(trials), "trials": hits[:5]}
 
 
 __all__ = ["ClassMetrics", "ClassificationMetrics", "EvalResult", "RegressionMetrics",

@@ -301,9 +301,17 @@ def evaluate_run(
     from .tables import drift_warnings
 
     warnings = [*result.notes, *result.warnings, *drift_warnings(result)]
+    seen = result.extra.get("trained_recordings") or {}
     if result.overlaps_training and split == "all":
         warnings.append(f"{', '.join(result.overlaps_training)} was used to train this run; "
                         "these metrics include training trials (use `split='test'`)")
+    elif seen.get("n_trials"):
+        warnings.append(
+            f"{seen['n_trials']} of {seen['n_evaluated']} evaluated trial(s) were read from "
+            f"source files this run was trained on (same SHA-256: "
+            f"{', '.join(seen['trials'])}{' ...' if seen['n_trials'] > len(seen['trials']) else ''}"
+            "): these metrics include training recordings; "
+            "evaluate on recordings the run never saw")
     return EvaluateRunResult(result, perturbed, warnings)
 
 

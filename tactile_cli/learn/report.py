@@ -306,6 +306,10 @@ def _independence(info: Mapping[str, Any], m: Mapping[str, Any], origins: _Origi
         if m.get("split") == "all":
             return "no (the evaluated data include the training trials)"
         return f"held out: the {m.get('split')} trials of the training file(s)"
+    seen = _dict(m.get("trained_recordings"))
+    if isinstance(seen.get("n_trials"), int) and seen["n_trials"] > 0:
+        return (f"no ({seen['n_trials']} of {seen.get('n_evaluated')} evaluated trials were "
+                "read from source files the run was trained on)")
     evaluated: set[str] = set()
     for d in (d for d in _list(m.get("data")) if isinstance(d, dict)):
         evaluated.update(str(h) for h in [d.get("sha256"), *_list(d.get("recordings_sha256"))]

@@ -182,6 +182,20 @@ def prepare(config: TrainConfig, data_paths: Sequence[Path], *,
     return Prepared(trials, assignment, heads, norm, windows, spec, notes)
 
 
+def trained_sources(trials: Sequence[TrialSeries], splits: Sequence[str]) -> list[str]:
+    """The SHA-256 of every source file of the train and validation trials (sorted)."""
+    from ..store.reader import trial_source_hashes
+
+    by_file: dict[str, dict[str, frozenset[str]]] = {}
+    out: set[str] = set()
+    for t, split in zip(trials, splits, strict=True):
+        if split in ("train", "val"):
+            if t.file not in by_file:
+                by_file[t.file] = trial_source_hashes(t.file)
+            out |= by_file[t.file].get(t.trial, frozenset())
+    return sorted(out)
+
+
 def batch_targets(ws: WindowSet, idx: np.ndarray) -> dict[str, torch.Tensor]:
     return {k: torch.from_numpy(np.ascontiguousarray(v[idx])) for k, v in ws.targets.items()}
 
@@ -433,6 +447,9 @@ def train(
         "heads": [h.as_dict() for h in prep.heads],
         "input": prep.input.as_dict(),
         "sensor_unit": sensor_unit_record(paths, d.stream),
+        # the source files (SHA-256) of the trials it learned from: `evaluate` finds them in
+        # any file, not only this one (the same recordings ingested again, or with others)
+        "trained_sources_sha256": trained_sources(prep.trials, prep.assignment.splits),
         "recording_order": recording_record(
             [t for t, s in zip(prep.trials, prep.assignment.splits, strict=True)
              if s in ("train", "val")], prep.heads, split_mode=d.split.mode,

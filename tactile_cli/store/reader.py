@@ -235,6 +235,26 @@ def read_signal(path: str | Path, trial: str, stream: str) -> dict[str, Any]:
                 "sample_labels": {k: v.values for k, v in s.sample_labels.items()}}
 
 
+def trial_source_hashes(path: str | Path) -> dict[str, frozenset[str]]:
+    """Trial name -> the SHA-256 of the source files that are its own: read for it and for
+    no other trial of the file (its ``source_index`` rows of ``/provenance/sources``; a
+    file every trial shares, such as a scene a synthetic set was drawn from, or two
+    trials' identical header-only files, identify no recording). Two trials with an own
+    source in common hold the same recording, whichever tactile file they are in: what
+    "the run trained on these trials" is checked by. Empty for a trial with none."""
+    rows_of: dict[str, list[str]] = {}
+    with open_tactile(path) as h5, _reading(Path(path), "/provenance/sources"):
+        shas = ([attr_value(s) for s in h5["provenance/sources/sha256"][()]]
+                if "provenance/sources/sha256" in h5 else [])
+        for name, group in (h5["trials"].items() if "trials" in h5 else ()):
+            index = group.attrs.get("source_index")
+            rows = [] if index is None else np.atleast_1d(np.asarray(index)).tolist()
+            rows_of[name] = sorted({str(shas[i]) for i in rows if 0 <= int(i) < len(shas)})
+    uses = Counter(sha for rows in rows_of.values() for sha in rows)
+    return {name: frozenset(sha for sha in rows if uses[sha] == 1)
+            for name, rows in rows_of.items()}
+
+
 #: Source-file suffixes that mark a file as derived from another tactile HDF5 file.
 TACTILE_SUFFIXES = (".h5", ".hdf5")
 
