@@ -199,10 +199,12 @@ def fold_line(index: int, summary: dict[str, Any]) -> str:
 def train_summary(result: TrainResult | CvTrainResult) -> str:
     """The line ``tactile train`` ends with."""
     from .cv import CvTrainResult
+    from .splits import fold_text
 
     if isinstance(result, CvTrainResult):
-        return (f"wrote {result.run_dir}: {result.family}, {result.n_folds} folds "
-                f"({result.mode}), {len(result.trained)} trained in "
+        return (f"wrote {result.run_dir}: {result.family}, "
+                f"{fold_text(result.k, result.n_folds, result.mode, result.by)}, "
+                f"{len(result.trained)} trained in "
                 f"{result.wall_time_s:.1f} s with {result.jobs} process(es); evaluate with "
                 f"`tactile evaluate {result.run_dir}`")
     acc = result.best_val_accuracy

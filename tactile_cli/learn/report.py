@@ -300,6 +300,8 @@ def _independence(info: Mapping[str, Any], m: Mapping[str, Any], origins: _Origi
     cv = m.get("cv")
     if isinstance(cv, dict) and cv:
         by = f" by {cv['by']}" if cv.get("by") else ""
+        if cv.get("k") == "loto":
+            return "held out: the trials of each fold (leave one trial out)"
         return (f"held out: the trials of each fold ({cv.get('k')}-fold {cv.get('mode', '')}"
                 f"{by} cross-validation)")
     if _list(m.get("overlaps_training")):
@@ -908,7 +910,8 @@ def _spread_section(folder: Path, inputs: _Inputs) -> str:
     inputs.add("seed spread", record_path)
     record = read_spread_record(record_path)
     cv = record.get("cv")
-    how = (f"{cv}-fold cross-validation, split {_dict(record.get('split')).get('mode', '?')}"
+    how = ("leave-one-trial-out cross-validation" if cv == "loto" else
+           f"{cv}-fold cross-validation, split {_dict(record.get('split')).get('mode', '?')}"
            if cv is not None else "scored on " + ", ".join(
                str(_dict(d).get("path")) for d in _list(record.get("eval_data"))))
     html = (f"<h3>{_e(folder.name)}</h3><p>config <code>{_e(record.get('config'))}</code>; "

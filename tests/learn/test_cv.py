@@ -243,3 +243,19 @@ def test_load_run_of_a_cv_parent_says_to_give_a_fold(cv_run):
     with pytest.raises(InputError, match="give a fold's folder"):
         load_run(cv_run[0])
     assert cvmod.parse_cv("LOTO") == "loto" and cvmod.parse_cv("5") == 5
+
+
+def test_the_closing_line_names_leave_one_trial_out(tmp_path):
+    """`train --cv loto` ended with "7 folds (random)": the fold rule is named as the plan
+    line names it."""
+    from tactile_cli.learn.cv import CvTrainResult
+    from tactile_cli.learn.pipeline import train_summary
+
+    def line(k, mode, by):
+        return train_summary(CvTrainResult(
+            run_dir=tmp_path, family="fnn", k=k, n_folds=7, mode=mode, by=by, resumed=[],
+            trained=list(range(7)), jobs=1, wall_time_s=1.0, warnings=[], folds=[]))
+
+    assert line("loto", "random", None).startswith(f"wrote {tmp_path}: fnn, 7 folds (leave "
+                                                   "one trial out), 7 trained")
+    assert ", 7 folds (stratified by material), " in line(7, "stratified", "material")
