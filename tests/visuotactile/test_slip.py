@@ -133,3 +133,22 @@ def test_cli_json_plot_and_errors(frames_file: Path, tmp_path: Path) -> None:
                               "--n-static", "50"])
     assert bad.exit_code == 2 and "50 static" in bad.output
     assert runner.invoke(app, ["slip-signal", "--help"]).exit_code == 0
+
+
+def test_a_slip_without_its_onset_says_what_to_add():
+    import pytest as _pytest
+
+    from tactile_cli.errors import InputError as _InputError
+    from tactile_cli.visuotactile.slip import trial_label
+
+    assert trial_label({"slip": "slip", "slip_onset_s": "0.4"}, path="f.h5", trial="a") == (
+        True, 0.4)
+    assert trial_label({"slip": "no_slip"}, path="f.h5", trial="a") == (False, None)
+    with _pytest.raises(_InputError) as err:
+        trial_label({"slip": "slip"}, path="f.h5", trial="067_30_mm")
+    assert str(err.value) == (
+        "f.h5, /trials/067_30_mm/labels: slip trial '067_30_mm' has no numeric slip_onset_s "
+        "label (=None): a slip is scored by the frame it is found at, so each trial labelled "
+        "slip=slip needs its onset in seconds; add a slip_onset_s column to the "
+        "--trial-labels table and ingest again, or decide whole lifts without onsets with "
+        "`tactile slip-imprint`")
