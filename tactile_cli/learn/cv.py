@@ -279,9 +279,23 @@ def train_cv(
     return CvTrainResult(out, config.model.family, plan.k, len(plan.folds), plan.mode, plan.by,
                          sorted(finished), [f.index for f in todo], jobs,
                          info["wall_time_s"],
-                         list(plan.warnings) + [f"fold {i}: {note}" for i in sorted(summaries)
-                                                for note in summaries[i].get("notes", [])],
+                         list(plan.warnings) + _fold_split_warnings(plan)
+                         + [f"fold {i}: {note}" for i in sorted(summaries)
+                            for note in summaries[i].get("notes", [])],
                          [{"fold": i, **summaries[i]} for i in sorted(summaries)])
+
+
+def _fold_split_warnings(plan: FoldPlan) -> list[str]:
+    """Each distinct warning of the folds' own train/validation splits, with the folds that
+    gave it (a blocked split with one block left in a fold's training trials has none for
+    validation, so early stopping has nothing to watch)."""
+    by_text: dict[str, list[int]] = {}
+    for f in plan.folds:
+        for w in f.assignment.warnings:
+            by_text.setdefault(w, []).append(f.index)
+    return [f"fold(s) {', '.join(map(str, folds))}: {text}" + (
+        " (no validation trials: patience and monitor do nothing; the last epoch is kept)"
+        if "none left for val" in text else "") for text, folds in by_text.items()]
 
 
 def _stop_pool(pool: ProcessPoolExecutor, fold_dirs: Sequence[Path]) -> None:

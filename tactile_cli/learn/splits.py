@@ -223,10 +223,22 @@ def _blocked_split(trials: Sequence[SplitTrial], split: SplitConfig, by: str
         if split.within is None and n_test == 0 and split.test_fraction > 0:
             raise InputError(f"label {by!r} has {len(values)} value(s): a blocked split needs "
                              "at least 2 (one for training and one held out)")
+        held = {"test": 0, "val": 0}
         for pos, (_, members) in enumerate(reversed(values)):
             name = "test" if pos < n_test else "val" if pos < n_test + n_val else "train"
             for i in members:
                 out[i] = name
+            if name in held:
+                held[name] += len(members)
+        for name, fraction in (("val", split.val_fraction), ("test", split.test_fraction)):
+            if fraction > 0 and held[name] > max(1.5 * fraction * n, _count(fraction, n) + 1):
+                instead = ("val_fraction 0 (no early stopping)" if name == "val"
+                           else "test_fraction 0")
+                warnings.append(
+                    f"{name}: {held[name]} of {n} trial(s){where} ({100 * held[name] / n:.0f} %) "
+                    f"for {name}_fraction {fraction:g}: whole blocks of {by} are held out "
+                    f"and {len(values)} value(s) make blocks that large; give more values of "
+                    f"{by}, or {instead} if that is too much to hold out")
     return SplitAssignment(tuple(out), "blocked", by, tuple(warnings))
 
 

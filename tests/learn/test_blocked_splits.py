@@ -126,3 +126,29 @@ def test_contiguous_blocks_are_as_even_as_possible():
     assert contiguous_blocks([3], 1) == [0]
     with pytest.raises(ValueError, match="between 1 and the number of values"):
         contiguous_blocks([1, 1], 3)
+
+
+def test_blocks_larger_than_the_fraction_asked_are_said():
+    """Blocked by repetition with 2 repetitions: val_fraction 0.1 holds out a whole
+    repetition, half the trials; the split says so instead of training on half silently."""
+    trials = [_trial(f"f{i}_{r}", rep=str(r)) for i in range(10) for r in (0, 1)]
+    a = assign_splits(trials, SplitConfig(mode="blocked", by="rep", val_fraction=0.1),
+                      seed=0)
+    assert a.counts() == {"train": 10, "val": 10, "test": 0}
+    assert a.warnings == (
+        "val: 10 of 20 trial(s) (50 %) for val_fraction 0.1: whole blocks of rep are held out "
+        "and 2 value(s) make blocks that large; give more values of rep, or val_fraction 0 (no "
+        "early stopping) if that is too much to hold out",)
+    # blocks near the fraction asked: nothing to say (4 of 40 for 0.1)
+    assert assign_splits(_slides(4, 10), SplitConfig(mode="blocked", by="sample",
+                                                     val_fraction=0.1), seed=0).warnings == ()
+
+
+def test_the_folds_without_validation_are_named_once():
+    from tactile_cli.learn.cv import _fold_split_warnings
+
+    plan = cv_folds(_slides(2, 2), SplitConfig(mode="blocked", by="sample", val_fraction=0.2),
+                    seed=0, k=2)
+    assert _fold_split_warnings(plan) == [
+        "fold(s) 0, 1: sample has 1 value(s): none left for val (no validation trials: "
+        "patience and monitor do nothing; the last epoch is kept)"]
