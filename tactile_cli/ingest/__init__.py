@@ -100,7 +100,7 @@ def ingest(
         if common.labels:
             for name in writer.trial_names:
                 writer.trial_writer(name).set_labels(**common.labels)
-        apply_sidecars(writer, annotations=ann, labels=per_trial)
+        notes = [*notes, *apply_sidecars(writer, annotations=ann, labels=per_trial)]
         for sidecar in common.files():
             writer.add_source(sidecar)
         written = writer.commit()

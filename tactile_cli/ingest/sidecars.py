@@ -254,9 +254,11 @@ def _trial(path: Path, line: int, name: str) -> str:
 
 
 def apply_sidecars(writer: StoreWriter, *, annotations: Annotations | None = None,
-                   labels: TrialLabels | None = None) -> None:
+                   labels: TrialLabels | None = None) -> list[str]:
     """Write parsed sidecars into the trials of a file being written (through
     :meth:`StoreWriter.trial_writer <tactile_cli.store.writer.StoreWriter.trial_writer>`).
+    Returns a note naming the trials a labels table has no row for (they keep only the
+    labels of the input and ``labels``).
 
     Raises InputError naming the file and line of a row whose trial is not in the file, of
     a trial that already has annotations, or of a label that contradicts one already set.
@@ -266,7 +268,8 @@ def apply_sidecars(writer: StoreWriter, *, annotations: Annotations | None = Non
     def unknown(path: Path, trial: str, line: int) -> InputError:
         shown = ", ".join(sorted(have)[:8]) + (" ..." if len(have) > 8 else "")
         return InputError(f"trial {trial!r} is not among the ingested trials ({shown}); "
-                          "trial names are the input file stems", path=path,
+                          "a trial is named by its input file's stem or folder's name "
+                          "(`tactile info INPUT` lists the names an ingest gives)", path=path,
                           where=f"line {line}")
 
     if annotations is not None:
@@ -298,6 +301,13 @@ def apply_sidecars(writer: StoreWriter, *, annotations: Annotations | None = Non
                     raise InputError(f"split {split!r} contradicts {trial_writer.split!r} set by "
                                      "the input", path=labels.path, where=f"line {line}")
                 trial_writer.set_split(split)
+        missing = sorted(have - set(labels.rows))
+        if missing:
+            shown = ", ".join(missing[:5]) + (f" and {len(missing) - 5} more"
+                                              if len(missing) > 5 else "")
+            return [f"{labels.path}: no row for {len(missing)} of {len(have)} trial(s) "
+                    f"({shown}); they have none of its labels"]
+    return []
 
 
 __all__ = ["Annotations", "TrialLabels", "read_annotations", "read_trial_labels",

@@ -92,6 +92,20 @@ def test_a_trial_without_rows_gets_no_annotations(tmp_path, recordings):
         assert f["trials/rec_a/annotations/start_s"][()].tolist() == [1.0]
 
 
+def test_a_trial_without_a_labels_row_is_named(tmp_path, recordings):
+    """A --trial-labels table that misses a trial: written, and the trial is named (it has
+    none of the table's labels, which a train config reading them would refuse later)."""
+    table = _write(tmp_path / "labels.csv", "trial,force\nrec_a,1\n")
+    notes: list[str] = []
+    out = ingest(recordings, tmp_path / "out.h5", options={"width_px": W, "height_px": H},
+                 trial_labels=table, on_note=notes.append)
+    assert notes == [f"{table}: no row for 1 of 2 trial(s) (rec_b); they have none of its "
+                     "labels"]
+    with h5py.File(out) as f:
+        assert "force" not in f["trials/rec_b/labels"].attrs
+        assert f["trials/rec_a/labels"].attrs["force"] == 1
+
+
 @pytest.mark.parametrize(
     ("kind", "text", "message"),
     [
@@ -113,13 +127,15 @@ def test_a_trial_without_rows_gets_no_annotations(tmp_path, recordings):
          "line 1: unexpected column 'who'; an annotations file has exactly the columns "
          "trial, start_s, end_s, label"),
         ("annotations", "trial,start_s,end_s,label\nrec_a,0,1,press\nrec_c,0,1,press\n",
-         "line 3: trial 'rec_c' is not among the ingested trials (rec_a, rec_b); trial "
-         "names are the input file stems"),
+         "line 3: trial 'rec_c' is not among the ingested trials (rec_a, rec_b); a trial "
+         "is named by its input file's stem or folder's name (`tactile info INPUT` lists the "
+         "names an ingest gives)"),
         ("trial-labels", "trial,force\nrec_a,1\nrec_a,2\n",
          "line 3: trial 'rec_a' has a second row (the first is line 2)"),
         ("trial-labels", "trial,force\nrec_a,1\nzzz,2\n",
-         "line 3: trial 'zzz' is not among the ingested trials (rec_a, rec_b); trial names "
-         "are the input file stems"),
+         "line 3: trial 'zzz' is not among the ingested trials (rec_a, rec_b); a trial is "
+         "named by its input file's stem or folder's name (`tactile info INPUT` lists the "
+         "names an ingest gives)"),
         ("trial-labels", "name,force\n", "line 1: no 'trial' column; the header names "
          "['name', 'force']"),
         ("trial-labels", "trial,force,force\n", "line 1: column 'force' named twice in the "
