@@ -173,8 +173,13 @@ def best_threshold(changes: Sequence[float], slipped: Sequence[bool]) -> Thresho
     pick = int(tied[(tied.size - 1) // 2])
     thr = float(cands[pick])
     right = int(((c > thr) == y).sum())
-    return ThresholdChoice(thr, float(cands[tied[0]]), float(cands[tied[-1]]), right,
-                           int(c.size))
+    # the candidate between changes v[i-1] and v[i] decides as any threshold in [v[i-1],
+    # v[i]) does (a trial slips when its change is > the threshold): the range as good is
+    # from the change below the first tied candidate up to the one above the last
+    v = np.unique(c)
+    lo = float(v[tied[0] - 1]) if tied[0] > 0 else float(cands[0])
+    hi = float(v[tied[-1]]) if tied[-1] < v.size else float(cands[-1])
+    return ThresholdChoice(thr, lo, hi, right, int(c.size))
 
 
 @dataclass(frozen=True)
@@ -366,7 +371,7 @@ class ImprintFileResult:
                 + ", ".join(f"{f.group} {f.threshold:.4f} ({f.correct}/{f.n_trials})"
                             for f in cv.folds))
             lines.append(f"threshold {cv.threshold:.4f} (chosen on all {cv.n_trials} "
-                         f"labelled trials; as good from {cv.lo:.4f} to {cv.hi:.4f})")
+                         f"labelled trials; as good from {cv.lo:.4f} up to {cv.hi:.4f})")
         right, n = self.in_sample()
         if n:
             tag = ("on the trials it was chosen on: not a held-out figure" if cv is not None

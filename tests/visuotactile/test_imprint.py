@@ -111,6 +111,8 @@ def test_best_threshold_sits_in_the_gap_and_cv_scores_each_group_held_out() -> N
     choice = best_threshold(changes, slipped)
     assert choice.threshold == pytest.approx((0.02 + 0.06) / 2)
     assert choice.correct == 9
+    # any threshold from the largest held change up to the smallest slip decides alike
+    assert (choice.lo, choice.hi) == (0.02, 0.06)
     groups = ["a"] * 5 + ["b"] * 4
     cv = threshold_by_cv(changes, slipped, groups)
     # fold a is chosen on b (gap 0.006 .. 0.06): a's 0.02 is held, right; fold b on a's
