@@ -121,8 +121,9 @@ def evaluate_spread(
     if record.get("cv") is not None:
         raise InputError("a cross-validated spread is scored on its held-out folds, and its "
                          "seeds have a model per fold, none of the whole data: to score other "
-                         "recordings, make the spread with `tactile seed-spread --eval-data "
-                         "FILE` (no --cv), or evaluate one fold's model "
+                         "recordings, make the spread without cross-validation, each seed scored "
+                         "on held-out files (`tactile seed-spread` with its eval data), or "
+                         "evaluate one fold's model "
                          "(SPREAD/seed_S/folds/fold_00)", path=spread)
     if not data_paths:
         raise InputError("no data files; give `data_paths`: the recordings to score every "

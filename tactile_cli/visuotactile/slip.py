@@ -437,8 +437,9 @@ def trial_label(labels: dict[str, object], *, path: object, trial: str
         raise InputError(f"slip trial {trial!r} has no numeric slip_onset_s label "
                          f"(={onset!r}): a slip is scored by the frame it is found at, so each "
                          "trial labelled slip=slip needs its onset in seconds; add a "
-                         "slip_onset_s column to the --trial-labels table and ingest again, "
-                         "or decide whole lifts without onsets with `tactile slip-imprint`",
+                         "slip_onset_s column to the table of trial labels the file was "
+                         "ingested with and ingest again, or decide whole lifts without "
+                         "onsets with `tactile slip-imprint`",
                          path=str(path), where=f"/trials/{trial}/labels")
     return True, onset_f
 

@@ -149,6 +149,6 @@ def test_a_slip_without_its_onset_says_what_to_add():
     assert str(err.value) == (
         "f.h5, /trials/067_30_mm/labels: slip trial '067_30_mm' has no numeric slip_onset_s "
         "label (=None): a slip is scored by the frame it is found at, so each trial labelled "
-        "slip=slip needs its onset in seconds; add a slip_onset_s column to the "
-        "--trial-labels table and ingest again, or decide whole lifts without onsets with "
-        "`tactile slip-imprint`")
+        "slip=slip needs its onset in seconds; add a slip_onset_s column to the table "
+        "of trial labels the file was ingested with and ingest again, or decide whole lifts "
+        "without onsets with `tactile slip-imprint`")
