@@ -941,16 +941,17 @@ def _spread_section(folder: Path, inputs: _Inputs) -> str:
 
 def _check_inputs(run_dirs: Sequence[str | Path], data_paths: Sequence[str | Path],
                   figure_dirs: Sequence[str | Path]
-                  ) -> tuple[list[Path], list[Path], list[Path], list[Path]]:
+                  ) -> tuple[list[Path], list[Path], list[Path], dict[Path, list[Path]]]:
     """The inputs as paths, each checked before anything is written; a seed-spread folder
-    stands for its seed runs (and is returned in the last list)."""
-    dirs, spreads = [], []
+    stands for its seed runs (the last item: each spread folder -> its seed runs)."""
+    dirs: list[Path] = []
+    spreads: dict[Path, list[Path]] = {}
     for d in map(Path, run_dirs):
         members = spread_runs(d)
         if members is None:
             dirs.append(check_run_folder(d))
         else:
-            spreads.append(d)
+            spreads[d] = members
             dirs.extend(members)
     datas = [Path(p) for p in data_paths]
     figs = [Path(p) for p in figure_dirs]
@@ -1010,9 +1011,8 @@ def build_report(
         runs.read_run_config(d)  # a damaged config is refused before anything is written
     labels = run_labels(dirs, [i["model"]["family"] for i in infos])
     results = _results(dirs, labels, infos, origins, inputs)
-    members = {f: spread_runs(f) or [] for f in spreads}
     units = [Path(d) for d in run_dirs]
-    cmp_html, compared = _comparison_sections(units, members, results, margin_pp, metric,
+    cmp_html, compared = _comparison_sections(units, spreads, results, margin_pp, metric,
                                               notes)
     pert_html, perturbed = _perturbation_sections(dirs, inputs)
     run_html = "".join(
